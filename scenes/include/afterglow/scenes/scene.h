@@ -1,0 +1,169 @@
+// The Scene model: what afterglow knows of a level once it is loaded. Every later stage (UVs,
+// baking, probes) reads this and nothing else, so it holds world-ready data: triangle lists with
+// generated normals, linear colours, decoded linear textures, flattened instances with their
+// world transforms. Units follow glTF: metres, lux for directional lights, candela for point and
+// spot lights, emissive radiance = emissiveFactor × emissiveTexture × emissiveStrength.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace afterglow::scenes {
+
+// A reference from a material to a texture, with KHR_texture_transform applied on lookup.
+struct TextureRef {
+  int texture = -1;           // index into Scene::textures; -1 = no texture
+  int texCoord = 0;           // UV set (0 = TEXCOORD_0), after KHR_texture_transform's override
+  glm::vec2 offset{0.0f};     // KHR_texture_transform offset, in UV units
+  glm::vec2 scale{1.0f};      // KHR_texture_transform scale
+  float rotation = 0.0f;      // KHR_texture_transform rotation, radians, counter-clockwise
+  bool hasTransform = false;  // true when the glTF carried KHR_texture_transform
+
+  bool valid() const { return texture >= 0; }
+  // Maps a mesh UV to the texture's UV as KHR_texture_transform defines (T * R * S).
+  glm::vec2 transform(glm::vec2 uv) const;
+};
+
+// A decoded texture. Colour textures (base colour, emissive) are decoded from sRGB to linear on
+// load; data textures (metallic-roughness, normal) are kept linear as stored.
+struct Texture {
+  std::string name;
+  std::string uri;       // as written in the glTF (file name or "" when embedded)
+  int width = 0;         // 0 when the image could not be loaded (the material falls back)
+  int height = 0;
+  bool srgb = false;     // true when it was decoded from sRGB
+  std::vector<glm::vec4> texels;  // linear RGBA, row-major, first row at v = 0
+
+  bool loaded() const { return width > 0 && height > 0; }
+  // Bilinear lookup with repeat wrapping; returns (1,1,1,1) when not loaded.
+  glm::vec4 sample(glm::vec2 uv) const;
+};
+
+enum class AlphaMode { Opaque, Mask, Blend };
+
+struct Material {
+  std::string name;
+  glm::vec4 baseColorFactor{1.0f};  // linear RGBA
+  TextureRef baseColorTexture;
+  float metallicFactor = 1.0f;
+  float roughnessFactor = 1.0f;
+  TextureRef metallicRoughnessTexture;  // G = roughness, B = metallic
+  TextureRef normalTexture;             // kept for export; not used for lighting
+  TextureRef occlusionTexture;          // kept for export; not used for lighting
+  glm::vec3 emissiveFactor{0.0f};       // linear RGB
+  float emissiveStrength = 1.0f;        // KHR_materials_emissive_strength
+  TextureRef emissiveTexture;
+  bool doubleSided = false;
+  AlphaMode alphaMode = AlphaMode::Opaque;
+  float alphaCutoff = 0.5f;  // used when alphaMode == Mask
+
+  // Emitted radiance of an untextured point (W·sr⁻¹·m⁻² in glTF's photometric sense).
+  glm::vec3 emission() const { return emissiveFactor * emissiveStrength; }
+  bool emissive() const { return emission() != glm::vec3(0.0f); }
+};
+
+// One triangle list with one material. Attribute arrays are per vertex; uv0/uv1 are empty when
+// the glTF had none. Normals are always present (flat normals are generated when missing).
+struct Primitive {
+  int material = -1;  // index into Scene::materials; -1 = glTF's default material
+  std::vector<glm::vec3> positions;
+  std::vector<glm::vec3> normals;
+  std::vector<glm::vec2> uv0;
+  std::vector<glm::vec2> uv1;  // lightmap UVs (authored, or written by afterglow uv)
+  std::vector<uint32_t> indices;  // 3 per triangle; always filled, also for non-indexed input
+
+  size_t triangleCount() const { return indices.size() / 3; }
+};
+
+struct Mesh {
+  std::string name;
+  std::vector<Primitive> primitives;
+
+  size_t triangleCount() const;
+};
+
+// Where an instance's lightmap lives, once UVs are packed.
+struct LightmapLocation {
+  int atlas = -1;  // index of the atlas; -1 = no lightmap
+  int width = 0;   // atlas size in texels
+  int height = 0;
+};
+
+// A mesh placed in the world by a glTF node. One mesh used by several nodes stays one Mesh with
+// several Instances.
+struct Instance {
+  std::string name;  // the node's name (or "node<i>" when unnamed)
+  int node = -1;     // index of the glTF node it came from
+  int mesh = -1;     // index into Scene::meshes
+  glm::mat4 transform{1.0f};  // object to world
+  // extras.afterglow on the node (or inherited from its parent):
+  bool isStatic = true;        // "static": gets a lightmap and takes part in bounces
+  float lightmapScale = 1.0f;  // "lightmapScale": multiplies texelsPerUnit for this instance
+  bool castShadows = true;     // "castShadows"
+  LightmapLocation lightmap;
+};
+
+enum class LightType { Directional, Point, Spot };
+
+// KHR_lights_punctual, placed in the world.
+struct Light {
+  std::string name;
+  LightType type = LightType::Point;
+  glm::vec3 color{1.0f};   // linear RGB
+  float intensity = 1.0f;  // lux (directional) or candela (point, spot)
+  float range = 0.0f;      // metres; 0 = infinite
+  float innerConeAngle = 0.0f;                     // radians (spot)
+  float outerConeAngle = 0.78539816339744830962f;  // radians (spot), π/4 by default
+  glm::vec3 position{0.0f};                 // world (point, spot)
+  glm::vec3 direction{0.0f, 0.0f, -1.0f};   // world, the way the light travels (directional, spot)
+  int node = -1;
+  // extras.afterglow on the light:
+  float radius = 0.0f;              // "radius", metres: soft shadows for point and spot lights
+  float angularDiameter = 0.00925f; // "angularDiameter", radians (the sun's 0.53°): directional
+  float bounceIntensity = 1.0f;     // "bounceIntensity": scales this light in bounced light only
+};
+
+struct Camera {
+  std::string name;
+  bool perspective = true;
+  float yfov = 0.8f;         // radians
+  float aspectRatio = 0.0f;  // 0 = use the image's
+  float znear = 0.01f;
+  float zfar = 0.0f;         // 0 = infinite
+  float xmag = 1.0f, ymag = 1.0f;  // orthographic half extents
+  glm::mat4 transform{1.0f};       // camera to world; looks down -Z, +Y up
+  int node = -1;
+};
+
+struct Bounds {
+  glm::vec3 min{1e30f};
+  glm::vec3 max{-1e30f};
+  bool empty() const { return min.x > max.x; }
+  void extend(glm::vec3 p) { min = glm::min(min, p); max = glm::max(max, p); }
+  glm::vec3 size() const { return empty() ? glm::vec3(0.0f) : max - min; }
+};
+
+struct Scene {
+  std::string sourcePath;  // file it was loaded from ("" for procedural scenes)
+  std::vector<Mesh> meshes;
+  std::vector<Material> materials;
+  std::vector<Texture> textures;
+  std::vector<Instance> instances;
+  std::vector<Light> lights;
+  std::vector<Camera> cameras;
+  std::vector<std::string> warnings;  // everything the loader skipped or fixed up
+
+  // The material of a primitive, or the glTF default material for -1.
+  const Material& material(int index) const;
+  // World-space bounds over all instances.
+  Bounds bounds() const;
+  // Triangles over all instances (instanced meshes counted once per instance).
+  size_t instancedTriangleCount() const;
+  // Triangles over unique meshes.
+  size_t meshTriangleCount() const;
+};
+
+}  // namespace afterglow::scenes

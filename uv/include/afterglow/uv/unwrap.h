@@ -1,0 +1,38 @@
+// afterglow uv: lightmap UVs for every static instance of a scene.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "afterglow/core/progress.h"
+#include "afterglow/core/status.h"
+#include "afterglow/scenes/scene.h"
+#include "afterglow/uv/charts.h"
+#include "afterglow/uv/metrics.h"
+#include "afterglow/uv/pack.h"
+
+namespace afterglow::uv {
+
+enum class UvMode {
+  Generate,  // chart, parameterise and pack new UVs
+  Keep,      // use the authored TEXCOORD_1 when it is valid; fail with the reason otherwise
+};
+
+struct UnwrapOptions {
+  UvMode mode = UvMode::Generate;
+  ChartOptions charts;
+  PackOptions pack;
+};
+
+struct UnwrapResult {
+  Metrics metrics;
+  std::vector<std::string> warnings;
+};
+
+// Gives every static instance lightmap UVs (Primitive::uv1) and a LightmapLocation. Each static
+// instance ends up with a mesh of its own (instances of a shared mesh are duplicated, since each
+// needs its own atlas space); dynamic instances are left as they are. Deterministic.
+Result<UnwrapResult> unwrap(scenes::Scene& scene, const UnwrapOptions& options = {},
+                            Progress& progress = nullProgress());
+
+}  // namespace afterglow::uv
