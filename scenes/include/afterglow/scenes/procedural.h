@@ -6,10 +6,14 @@
 
 namespace afterglow::scenes {
 
-// The Cornell box with the classic dimensions (Cornell's measured data, 5.56 m box scaled to
-// metres ×0.01, i.e. a 5.56 × 5.49 × 5.59 box of 0.556 m... see procedural.cpp) and McGuire's
-// measured colours: white 0.725/0.71/0.68, red 0.63/0.065/0.05, green 0.14/0.45/0.091, two
-// boxes, and an emissive ceiling light.
+// The Cornell box as Cornell measured it (graphics.cornell.edu/online/box/data.html), in metres
+// in the data's own axes (Y up, right-handed): a 0.556 × 0.5488 × 0.5592 m room open towards -Z,
+// short and tall blocks, and a 0.130 × 0.105 m emissive ceiling light (radiance (17, 12, 4),
+// facing down, 1 mm below the ceiling). McGuire's measured colours: white 0.725/0.71/0.68, red
+// 0.63/0.065/0.05 (left wall, x ≈ 0.556), green 0.14/0.45/0.091 (right wall, x = 0). Every wall,
+// block and the light is its own single-sided mesh and instance, normals facing into the room
+// ("floor", "ceiling", "back_wall", "left_wall", "right_wall", "short_block", "tall_block",
+// "light"); camera "Camera" at (0.278, 0.273, -0.8) looking along +Z, yfov 0.686 rad.
 Scene makeCornellBox();
 
 struct FurnaceOptions {

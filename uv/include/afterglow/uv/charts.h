@@ -15,14 +15,21 @@
 namespace afterglow::uv {
 
 struct ChartOptions {
-  // A face joins a chart only if its normal is within this angle of the chart's mean normal.
+  // A face joins a growing chart only if its normal is within this angle of the chart's mean
+  // normal. Neighbouring charts may then merge past it when the union still unfolds flip-free
+  // with little stretch (a cylinder unrolls as one or two charts).
   float maxChartAngleDeg = 40.0f;       // degrees
   // Edges whose dihedral angle exceeds this are always chart boundaries (hard edges).
   float hardEdgeAngleDeg = 60.0f;       // degrees
+  // Edges where the input's vertex normals differ by more than this are chart boundaries too
+  // (hard shading edges). Faceted low-poly surfaces split their normals at smaller angles; they
+  // stay in one chart below this angle.
+  float shadingSeamAngleDeg = 45.0f;    // degrees
   // Faces within this angle of the chart's plane keep a chart planar (projected, zero stretch).
   float planarAngleDeg = 1.0f;          // degrees
-  // Triangles with area below this fraction of the mesh's mean triangle area count as
-  // degenerate: they join a neighbouring chart and are never a chart on their own.
+  // Triangles with area below this fraction of the primitive's mean triangle area count as
+  // degenerate: they join a chart that holds one of their vertices, and are a (zero-area) chart of
+  // their own only when no such chart exists.
   float degenerateAreaFraction = 1e-6f; // unitless
 };
 

@@ -35,6 +35,8 @@ struct PackResult {
 
 // Packs the charts: conservative footprints, padding, rotation, spill to more atlases past
 // maxAtlasSize. Deterministic: the same input gives the same output whatever the thread count.
+// A chart that fits no atlas even alone (larger than maxAtlasSize in every orientation), or has
+// non-finite points, keeps atlas = -1; the others are still packed.
 PackResult packCharts(const std::vector<PackChart>& charts, const PackOptions& options = {});
 
 }  // namespace afterglow::uv

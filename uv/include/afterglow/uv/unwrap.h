@@ -24,9 +24,18 @@ struct UnwrapOptions {
   PackOptions pack;
 };
 
+// Wall time of each stage, seconds (for reports and the benchmark).
+struct UnwrapTimings {
+  double charts = 0.0;   // segmentation and parameterisation (keep mode: validation)
+  double pack = 0.0;     // packing
+  double apply = 0.0;    // writing uv1 and per-instance meshes
+  double metrics = 0.0;  // computeMetrics
+};
+
 struct UnwrapResult {
   Metrics metrics;
   std::vector<std::string> warnings;
+  UnwrapTimings timings;
 };
 
 // Gives every static instance lightmap UVs (Primitive::uv1) and a LightmapLocation. Each static

@@ -1,0 +1,47 @@
+// Hand-written command-line parsing for the afterglow subcommands: options as `--name value`,
+// `--name=value` or a short alias, flags without a value, and positional arguments.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace afterglow::cli {
+
+// Process exit codes (README and `afterglow --help` list them).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitBadInput = 1,     // the scene could not be loaded or failed validation
+  kExitUsage = 2,        // the command line is wrong
+  kExitOutput = 3,       // an output file could not be written
+  kExitInterrupted = 130 // Ctrl-C (128 + SIGINT)
+};
+
+struct OptionSpec {
+  std::string name;       // long name without dashes, e.g. "texels-per-unit"
+  char shortName = 0;     // e.g. 'o'; 0 = none
+  bool takesValue = true; // false for flags such as --quiet
+};
+
+class Args {
+ public:
+  // Parses argv[first..argc). On failure returns false and sets error() to a one-line message.
+  bool parse(int argc, char** argv, int first, const std::vector<OptionSpec>& specs);
+  const std::string& error() const { return error_; }
+
+  bool has(const std::string& name) const { return values_.count(name) != 0; }
+  std::string get(const std::string& name, const std::string& fallback = "") const;
+  const std::vector<std::string>& positional() const { return positional_; }
+
+  // Typed getters: false (with error() set) when the value does not parse or is out of range.
+  bool getInt(const std::string& name, int fallback, int minValue, int maxValue, int* out);
+  bool getFloat(const std::string& name, float fallback, float minExclusive, float maxValue,
+                float* out);
+
+ private:
+  std::map<std::string, std::string> values_;
+  std::vector<std::string> positional_;
+  std::string error_;
+};
+
+}  // namespace afterglow::cli

@@ -1,0 +1,15 @@
+// The afterglow subcommands. Each takes the whole argv and the index of its first own argument,
+// and returns a process exit code (ExitCode in args.h).
+#pragma once
+
+namespace afterglow::cli {
+
+int runUv(int argc, char** argv, int first);
+int runInfo(int argc, char** argv, int first);
+
+// Help texts (printed by --help, and after a usage error hint).
+extern const char kUvHelp[];
+extern const char kInfoHelp[];
+extern const char kExitCodesHelp[];
+
+}  // namespace afterglow::cli

@@ -1,0 +1,33 @@
+// Pieces shared by the afterglow subcommands: loading SCENE arguments, errors, Ctrl-C.
+#pragma once
+
+#include <string>
+
+#include "afterglow/core/progress.h"
+#include "afterglow/core/status.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::cli {
+
+// Prints "afterglow: <message>" to stderr.
+void printError(const std::string& message);
+
+// True when SCENE names a built-in scene ("builtin:cornell", "builtin:furnace").
+bool isBuiltinScene(const std::string& scene);
+// Loads a .gltf/.glb path or a built-in scene. *usageError is set when the argument itself is
+// wrong (an unknown built-in name) rather than the file.
+Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextures,
+                                        bool* usageError);
+
+// Ctrl-C handling: while a guard lives, SIGINT cancels the given Progress (the work stops at its
+// next check) and sets interrupted(). A second Ctrl-C kills the process the default way.
+class InterruptGuard {
+ public:
+  explicit InterruptGuard(Progress& progress);
+  ~InterruptGuard();
+  InterruptGuard(const InterruptGuard&) = delete;
+  InterruptGuard& operator=(const InterruptGuard&) = delete;
+};
+bool interrupted();
+
+}  // namespace afterglow::cli

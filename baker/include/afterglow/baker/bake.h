@@ -1,0 +1,52 @@
+// afterglow bake: the precompute followed by one run of the runtime solver with the authored
+// lights. The scene must already carry lightmap UVs (uv::unwrap).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/baker/clusters.h"
+#include "afterglow/baker/texels.h"
+#include "afterglow/baker/transport_precompute.h"
+#include "afterglow/core/progress.h"
+#include "afterglow/core/status.h"
+#include "afterglow/runtime/solver.h"
+#include "afterglow/runtime/transport.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::baker {
+
+struct BakeOptions {
+  TexelOptions texels;
+  ClusterOptions clusters;
+  LinkOptions links;
+  DirectOptions direct;
+  runtime::SolveOptions solve;       // bounces (0 = to convergence within 0.1%)
+  float indirectIntensity = 1.0f;    // Unity's meaning: scales all indirect light
+  float albedoBoost = 1.0f;          // Unity's meaning: >= 1 pushes albedo toward white
+  glm::vec3 skyColor{0.0f};          // constant sky radiance, linear RGB
+  std::string skyImage;              // equirect HDR image (overrides skyColor when set)
+  int dilation = 2;                  // texels: how far each chart is dilated into its padding
+};
+
+struct StageTime {
+  std::string name;
+  double seconds = 0.0;
+};
+
+struct BakeResult {
+  runtime::TransportData transport;
+  TexelSet texels;
+  Clusters clusters;
+  std::vector<std::vector<glm::vec3>> lightmaps;  // per atlas, width*height linear E/π, dilated
+  std::vector<StageTime> stages;
+  uint64_t raysTraced = 0;
+  std::vector<std::string> warnings;
+};
+
+Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options = {},
+                        Progress& progress = nullProgress());
+
+}  // namespace afterglow::baker

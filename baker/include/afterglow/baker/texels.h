@@ -1,0 +1,57 @@
+// Stage 1 of the precompute: the lightmap texels of every static instance, each with a world
+// position, normal and footprint, placed on the surface and moved out of nearby geometry.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/core/progress.h"
+#include "afterglow/core/status.h"
+#include "afterglow/runtime/transport.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::baker {
+
+class RayTracer;
+
+struct TexelOptions {
+  // Rays cast around each sample point to find geometry it sits inside or behind.
+  int leakRays = 8;               // count
+  // How far a sample is pushed off its surface (self-intersection epsilon), as a fraction of
+  // the texel's world size, never below minOffset.
+  float offsetFraction = 0.05f;   // unitless
+  float minOffset = 1e-4f;        // metres
+};
+
+// Texels as structure-of-arrays; index t is the runtime's texel index.
+struct TexelSet {
+  std::vector<runtime::AtlasLayout> atlases;  // pixel -> texel index
+  std::vector<glm::vec3> position;   // world sample point (already pushed off the surface)
+  std::vector<glm::vec3> normal;     // world shading normal (unit)
+  std::vector<glm::vec3> geometricNormal;  // world face normal (unit), front side
+  std::vector<float> area;           // world area the texel covers, m²
+  std::vector<uint32_t> instance;    // index into Scene::instances
+  std::vector<uint32_t> primitive;   // index into the instance's Mesh::primitives
+  std::vector<uint32_t> triangle;    // triangle the sample lies on
+  std::vector<glm::vec2> uv0;        // material UV at the sample (for albedo/emission lookups)
+  std::vector<uint16_t> atlas;       // atlas index
+  std::vector<glm::u16vec2> pixel;   // texel coordinate in its atlas
+  std::vector<uint8_t> valid;        // 0 when the texel is buried in geometry (no light)
+
+  uint32_t size() const { return uint32_t(position.size()); }
+};
+
+// Rasterises every static instance's TEXCOORD_1 conservatively into its atlas and places one
+// sample per covered texel. Deterministic whatever the thread count.
+Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& tracer,
+                               const TexelOptions& options = {},
+                               Progress& progress = nullProgress());
+
+// The texel a surface point (given by its instance, primitive, triangle and barycentrics) maps
+// to through TEXCOORD_1, or runtime::kNoTexel for dynamic instances and unbaked pixels.
+uint32_t texelAt(const scenes::Scene& scene, const TexelSet& texels, uint32_t instance,
+                 uint32_t primitive, uint32_t triangle, glm::vec2 barycentric);
+
+}  // namespace afterglow::baker

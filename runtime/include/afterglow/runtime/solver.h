@@ -1,0 +1,56 @@
+// The radiosity solver shared by the offline bake and the relighting runtime.
+//
+//   cluster reflected light  R_c = ρ_c · (D_c + Σ_j F_cj R_j + S_c)
+//   cluster exitance         M_c = R_c + Le_c
+//   texel value (E/π)        T_t = D_t + indirectIntensity · Σ_j F_tj R_j + S_t
+//
+// D is direct light from punctual lights and emissive surfaces (sampled explicitly, which is why
+// emission enters texels and clusters through D and the links carry only R), S is sky light.
+// For bounces, D_c uses each light's bounceIntensity. Jacobi iteration with a double buffer keeps
+// results identical whatever the thread count.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/runtime/transport.h"
+
+namespace afterglow::runtime {
+
+struct SolveOptions {
+  int maxBounces = 0;             // 0 = iterate until converged (or 1000 passes)
+  float tolerance = 1e-3f;        // stop when the largest relative change of R is below this
+};
+
+class Solver {
+ public:
+  explicit Solver(const TransportData& data);
+
+  // Recomputes the per-cluster direct and sky terms and the albedos from the data's current
+  // source, material and sky settings. Call after changing any of them.
+  void prepare();
+  // Runs one Jacobi pass over the cluster links; returns the largest relative change.
+  float iterate();
+  // Iterates to convergence or options.maxBounces passes; returns the passes run.
+  int solve(const SolveOptions& options = {});
+  // Gathers the texel values (E/π, linear RGB) from the current cluster solution.
+  void gatherTexels(std::vector<glm::vec3>& texels) const;
+  // Resets the bounced light to zero (direct light only, before any pass).
+  void reset();
+
+  const std::vector<glm::vec3>& clusterReflected() const { return reflected_; }
+  const std::vector<glm::vec3>& clusterAlbedo() const { return albedo_; }
+
+ private:
+  const TransportData& data_;
+  std::vector<glm::vec3> albedo_;       // boosted diffuse albedo per cluster
+  std::vector<glm::vec3> clusterDirect_;  // D_c (with bounceIntensity) + S_c
+  std::vector<glm::vec3> reflected_;    // R_c
+  std::vector<glm::vec3> next_;
+};
+
+// The sky colour's SH for a constant radiance (only the DC term is non-zero).
+void constantSkySh(glm::vec3 radiance, glm::vec3 sh[kShCount]);
+
+}  // namespace afterglow::runtime

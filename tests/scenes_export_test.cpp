@@ -1,0 +1,470 @@
+// glTF export: round trips through saveGltf -> loadGltf, the JSON it writes, and atomicity.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "afterglow/core/atomic_file.h"
+#include "afterglow/scenes/gltf.h"
+#include "afterglow/scenes/procedural.h"
+#include "test_util.h"
+
+namespace afterglow::scenes {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+std::vector<std::string> filesIn(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+json readJson(const std::string& path) {
+  Result<std::string> text = readFile(path);
+  EXPECT_TRUE(text.isOk()) << text.message();
+  return json::parse(text.isOk() ? text.value() : std::string("{}"));
+}
+
+void expectVecNear(glm::vec3 a, glm::vec3 b, float tol, const std::string& what) {
+  EXPECT_NEAR(a.x, b.x, tol) << what;
+  EXPECT_NEAR(a.y, b.y, tol) << what;
+  EXPECT_NEAR(a.z, b.z, tol) << what;
+}
+
+void expectMatNear(const glm::mat4& a, const glm::mat4& b, float tol, const std::string& what) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) EXPECT_NEAR(a[c][r], b[c][r], tol) << what << " [" << c << r << "]";
+}
+
+// The Cornell box plus everything the exporter must carry that the procedural scene lacks.
+Scene decoratedCornellBox() {
+  Scene scene = makeCornellBox();
+  Light point;
+  point.name = "bulb";
+  point.type = LightType::Point;
+  point.color = {1.0f, 0.9f, 0.8f};
+  point.intensity = 12.5f;
+  point.range = 4.0f;
+  point.position = {0.2f, 0.4f, 0.3f};
+  point.radius = 0.05f;
+  scene.lights.push_back(point);
+  Light spot;
+  spot.name = "spot";
+  spot.type = LightType::Spot;
+  spot.intensity = 300.0f;
+  spot.position = {0.278f, 0.5f, 0.1f};
+  spot.direction = glm::normalize(glm::vec3(0.1f, -1.0f, 0.4f));
+  spot.innerConeAngle = 0.2f;
+  spot.outerConeAngle = 0.6f;
+  spot.bounceIntensity = 2.0f;
+  scene.lights.push_back(spot);
+  Light sun;
+  sun.name = "sun";
+  sun.type = LightType::Directional;
+  sun.intensity = 100000.0f;
+  sun.direction = glm::normalize(glm::vec3(-0.3f, -0.8f, 0.5f));
+  sun.angularDiameter = 0.02f;
+  scene.lights.push_back(sun);
+  Light down;  // straight along +Z: the antiparallel case of the -Z -> direction rotation
+  down.name = "backwards";
+  down.type = LightType::Directional;
+  down.direction = {0.0f, 0.0f, 1.0f};
+  scene.lights.push_back(down);
+
+  scene.instances[1].isStatic = false;
+  scene.instances[2].lightmapScale = 2.5f;
+  scene.instances[3].castShadows = false;
+  scene.instances[0].lightmap = {3, 512, 256};
+  scene.instances[4].lightmap = {0, 1024, 1024};
+  // Move one block to check that instance transforms survive.
+  glm::mat4 t(1.0f);
+  t[0] = glm::vec4(0.0f, 0.0f, -1.0f, 0.0f);
+  t[2] = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+  t[3] = glm::vec4(0.01f, 0.0f, -0.02f, 1.0f);
+  scene.instances[5].transform = t;
+
+  Primitive& floor = scene.meshes[0].primitives[0];
+  for (const glm::vec3& p : floor.positions) {
+    floor.uv0.push_back({p.x * 2.0f, p.z * 2.0f});
+    floor.uv1.push_back({p.x / 0.556f * 0.5f + 0.25f, p.z / 0.5592f * 0.5f});
+  }
+  scene.materials[1].doubleSided = true;
+  scene.materials[2].alphaMode = AlphaMode::Mask;
+  scene.materials[2].alphaCutoff = 0.3f;
+  scene.materials[0].metallicFactor = 0.25f;
+  scene.materials[0].roughnessFactor = 0.75f;
+  return scene;
+}
+
+void expectSameGeometry(const Scene& a, const Scene& b) {
+  ASSERT_EQ(a.meshes.size(), b.meshes.size());
+  for (size_t m = 0; m < a.meshes.size(); ++m) {
+    const Mesh& ma = a.meshes[m];
+    const Mesh& mb = b.meshes[m];
+    EXPECT_EQ(ma.name, mb.name);
+    ASSERT_EQ(ma.primitives.size(), mb.primitives.size()) << ma.name;
+    EXPECT_EQ(ma.triangleCount(), mb.triangleCount()) << ma.name;
+    for (size_t p = 0; p < ma.primitives.size(); ++p) {
+      const Primitive& pa = ma.primitives[p];
+      const Primitive& pb = mb.primitives[p];
+      EXPECT_EQ(pa.material, pb.material);
+      ASSERT_EQ(pa.indices.size(), pb.indices.size());
+      EXPECT_EQ(pa.uv0.size(), pb.uv0.size());
+      EXPECT_EQ(pa.uv1.size(), pb.uv1.size());
+      // Compare per corner so the test does not depend on vertex order.
+      for (size_t i = 0; i < pa.indices.size(); ++i) {
+        const uint32_t ia = pa.indices[i], ib = pb.indices[i];
+        expectVecNear(pa.positions[ia], pb.positions[ib], 1e-6f, ma.name + " position");
+        expectVecNear(pa.normals[ia], pb.normals[ib], 1e-6f, ma.name + " normal");
+        if (!pa.uv1.empty() && pa.uv1.size() == pb.uv1.size()) {
+          EXPECT_NEAR(pa.uv1[ia].x, pb.uv1[ib].x, 1e-6f);
+          EXPECT_NEAR(pa.uv1[ia].y, pb.uv1[ib].y, 1e-6f);
+        }
+        if (!pa.uv0.empty() && pa.uv0.size() == pb.uv0.size()) {
+          EXPECT_NEAR(pa.uv0[ia].x, pb.uv0[ib].x, 1e-6f);
+          EXPECT_NEAR(pa.uv0[ia].y, pb.uv0[ib].y, 1e-6f);
+        }
+      }
+    }
+  }
+}
+
+void expectSameMaterials(const Scene& a, const Scene& b) {
+  ASSERT_EQ(a.materials.size(), b.materials.size());
+  for (size_t i = 0; i < a.materials.size(); ++i) {
+    const Material& x = a.materials[i];
+    const Material& y = b.materials[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.baseColorFactor, y.baseColorFactor) << x.name;
+    EXPECT_EQ(x.metallicFactor, y.metallicFactor) << x.name;
+    EXPECT_EQ(x.roughnessFactor, y.roughnessFactor) << x.name;
+    EXPECT_EQ(x.emissiveFactor, y.emissiveFactor) << x.name;
+    EXPECT_EQ(x.emissiveStrength, y.emissiveStrength) << x.name;
+    EXPECT_EQ(x.doubleSided, y.doubleSided) << x.name;
+    EXPECT_EQ(x.alphaMode, y.alphaMode) << x.name;
+    if (x.alphaMode == AlphaMode::Mask) {
+      EXPECT_EQ(x.alphaCutoff, y.alphaCutoff) << x.name;
+    }
+  }
+}
+
+void expectSameInstances(const Scene& a, const Scene& b) {
+  ASSERT_EQ(a.instances.size(), b.instances.size());
+  for (size_t i = 0; i < a.instances.size(); ++i) {
+    const Instance& x = a.instances[i];
+    const Instance& y = b.instances[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.mesh, y.mesh) << x.name;
+    expectMatNear(x.transform, y.transform, 1e-6f, x.name);
+    EXPECT_EQ(x.isStatic, y.isStatic) << x.name;
+    EXPECT_EQ(x.lightmapScale, y.lightmapScale) << x.name;
+    EXPECT_EQ(x.castShadows, y.castShadows) << x.name;
+  }
+}
+
+TEST(GltfExport, CornellRoundTrip) {
+  const Scene scene = decoratedCornellBox();
+  const std::string dir = test::tempDir("export_cornell");
+  const std::string path = dir + "/cornell.gltf";
+  Status s = saveGltf(scene, path);
+  ASSERT_TRUE(s.isOk()) << s.message();
+  EXPECT_EQ(filesIn(dir), (std::vector<std::string>{"cornell.bin", "cornell.gltf"}));
+
+  Result<Scene> loaded = loadGltf(path);
+  ASSERT_TRUE(loaded.isOk()) << loaded.message();
+  const Scene& back = loaded.value();
+  EXPECT_TRUE(back.warnings.empty()) << back.warnings.front();
+  expectSameGeometry(scene, back);
+  expectSameMaterials(scene, back);
+  expectSameInstances(scene, back);
+  EXPECT_EQ(back.meshes[0].primitives[0].uv1.size(), 4u);
+  EXPECT_EQ(back.instancedTriangleCount(), scene.instancedTriangleCount());
+
+  ASSERT_EQ(back.lights.size(), scene.lights.size());
+  for (size_t i = 0; i < scene.lights.size(); ++i) {
+    const Light& x = scene.lights[i];
+    const Light& y = back.lights[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.type, y.type) << x.name;
+    EXPECT_EQ(x.color, y.color) << x.name;
+    EXPECT_EQ(x.intensity, y.intensity) << x.name;
+    EXPECT_EQ(x.range, y.range) << x.name;
+    if (x.type != LightType::Directional) expectVecNear(x.position, y.position, 1e-6f, x.name);
+    if (x.type != LightType::Point) expectVecNear(x.direction, y.direction, 1e-6f, x.name);
+    if (x.type == LightType::Spot) {
+      EXPECT_EQ(x.innerConeAngle, y.innerConeAngle);
+      EXPECT_EQ(x.outerConeAngle, y.outerConeAngle);
+    }
+    EXPECT_EQ(x.radius, y.radius) << x.name;
+    EXPECT_EQ(x.angularDiameter, y.angularDiameter) << x.name;
+    EXPECT_EQ(x.bounceIntensity, y.bounceIntensity) << x.name;
+  }
+
+  ASSERT_EQ(back.cameras.size(), 1u);
+  EXPECT_EQ(back.cameras[0].name, "Camera");
+  EXPECT_EQ(back.cameras[0].yfov, scene.cameras[0].yfov);
+  EXPECT_EQ(back.cameras[0].aspectRatio, 1.0f);
+  expectMatNear(back.cameras[0].transform, scene.cameras[0].transform, 1e-6f, "camera");
+}
+
+// extras.afterglow.lightmap is how `afterglow uv` tells other tools where each instance's
+// lightmap lives; reading the file back must give the same locations.
+TEST(GltfExport, LightmapRecordRoundTrip) {
+  const Scene scene = decoratedCornellBox();
+  const std::string dir = test::tempDir("export_lightmap");
+  ASSERT_TRUE(saveGltf(scene, dir + "/lm.gltf").isOk());
+  Result<Scene> back = loadGltf(dir + "/lm.gltf");
+  ASSERT_TRUE(back.isOk()) << back.message();
+  ASSERT_EQ(back->instances.size(), scene.instances.size());
+  for (size_t i = 0; i < scene.instances.size(); ++i) {
+    const LightmapLocation& x = scene.instances[i].lightmap;
+    const LightmapLocation& y = back->instances[i].lightmap;
+    EXPECT_EQ(x.atlas, y.atlas) << scene.instances[i].name;
+    EXPECT_EQ(x.width, y.width) << scene.instances[i].name;
+    EXPECT_EQ(x.height, y.height) << scene.instances[i].name;
+  }
+}
+
+// What the importer does not model (accessor bounds, component types, the lightmap record) is
+// checked in the JSON itself.
+TEST(GltfExport, WritesTheExpectedJson) {
+  const Scene scene = decoratedCornellBox();
+  const std::string dir = test::tempDir("export_json");
+  ASSERT_TRUE(saveGltf(scene, dir + "/c.gltf").isOk());
+  const json doc = readJson(dir + "/c.gltf");
+  EXPECT_EQ(doc["asset"]["version"], "2.0");
+  const std::set<std::string> used = doc["extensionsUsed"].get<std::set<std::string>>();
+  EXPECT_EQ(used, (std::set<std::string>{"KHR_lights_punctual", "KHR_materials_emissive_strength"}));
+  EXPECT_FALSE(doc.contains("extensionsRequired"));
+  EXPECT_EQ(doc["buffers"][0]["uri"], "c.bin");
+  EXPECT_EQ(doc["buffers"][0]["byteLength"].get<uintmax_t>(), fs::file_size(dir + "/c.bin"));
+
+  // 8 instances, 4 lights, 1 camera, all roots of scene 0.
+  ASSERT_EQ(doc["nodes"].size(), 13u);
+  EXPECT_EQ(doc["scenes"][0]["nodes"].size(), 13u);
+  const json& floor = doc["nodes"][0];
+  EXPECT_EQ(floor["name"], "floor");
+  EXPECT_EQ(floor["extras"]["afterglow"]["lightmap"],
+            (json{{"atlas", 3}, {"width", 512}, {"height", 256}}));
+  EXPECT_FALSE(doc["nodes"][6].contains("extras"));  // defaults are not written
+  EXPECT_EQ(doc["nodes"][1]["extras"]["afterglow"]["static"], false);
+  EXPECT_EQ(doc["nodes"][3]["extras"]["afterglow"]["castShadows"], false);
+
+  const json& prim = doc["meshes"][0]["primitives"][0];
+  EXPECT_TRUE(prim["attributes"].contains("TEXCOORD_0"));
+  EXPECT_TRUE(prim["attributes"].contains("TEXCOORD_1"));
+  EXPECT_FALSE(doc["meshes"][1]["primitives"][0]["attributes"].contains("TEXCOORD_1"));
+  const json& pos = doc["accessors"][prim["attributes"]["POSITION"].get<int>()];
+  EXPECT_NEAR(pos["min"][0].get<double>(), 0.0, 1e-9);
+  EXPECT_NEAR(pos["max"][0].get<double>(), 0.5528, 1e-7);
+  EXPECT_NEAR(pos["max"][2].get<double>(), 0.5592, 1e-7);
+  EXPECT_EQ(doc["accessors"][prim["indices"].get<int>()]["componentType"], 5123);
+
+  const json& light = doc["materials"][3];
+  EXPECT_EQ(light["name"], "light");
+  EXPECT_EQ(light["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"], 17.0);
+  EXPECT_EQ(light["emissiveFactor"][0], 1.0);
+  EXPECT_FALSE(doc["materials"][0].contains("emissiveFactor"));
+  // Floats are written as their shortest decimal form.
+  EXPECT_EQ(doc["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"][0].get<double>(), 0.725);
+}
+
+TEST(GltfExport, GlbAndEmbeddedRoundTrips) {
+  const Scene scene = decoratedCornellBox();
+  const std::string dir = test::tempDir("export_glb");
+  ASSERT_TRUE(saveGltf(scene, dir + "/box.glb").isOk());
+  EXPECT_EQ(filesIn(dir), (std::vector<std::string>{"box.glb"}));
+  Result<std::string> bytes = readFile(dir + "/box.glb");
+  ASSERT_TRUE(bytes.isOk());
+  EXPECT_EQ(bytes->substr(0, 4), "glTF");
+  EXPECT_EQ(bytes->size() % 4, 0u);
+  Result<Scene> glb = loadGltf(dir + "/box.glb");
+  ASSERT_TRUE(glb.isOk()) << glb.message();
+  expectSameGeometry(scene, glb.value());
+  expectSameMaterials(scene, glb.value());
+  expectSameInstances(scene, glb.value());
+  EXPECT_EQ(glb->lights.size(), 4u);
+
+  const std::string dir2 = test::tempDir("export_embedded");
+  SaveOptions options;
+  options.embedBuffers = true;
+  ASSERT_TRUE(saveGltf(scene, dir2 + "/box.gltf", options).isOk());
+  EXPECT_EQ(filesIn(dir2), (std::vector<std::string>{"box.gltf"}));
+  Result<Scene> embedded = loadGltf(dir2 + "/box.gltf");
+  ASSERT_TRUE(embedded.isOk()) << embedded.message();
+  expectSameGeometry(scene, embedded.value());
+}
+
+TEST(GltfExport, LargeMeshUses32BitIndices) {
+  FurnaceOptions options;
+  options.subdivisions = 110;  // 6 * 111² = 73926 vertices, beyond 16-bit indices
+  const Scene scene = makeFurnaceBox(options);
+  const std::string dir = test::tempDir("export_large");
+  ASSERT_TRUE(saveGltf(scene, dir + "/furnace.gltf").isOk());
+  const json doc = readJson(dir + "/furnace.gltf");
+  const int indices = doc["meshes"][0]["primitives"][0]["indices"];
+  EXPECT_EQ(doc["accessors"][indices]["componentType"], 5125);
+  Result<Scene> back = loadGltf(dir + "/furnace.gltf");
+  ASSERT_TRUE(back.isOk()) << back.message();
+  expectSameGeometry(scene, back.value());
+  EXPECT_NEAR(back->materials[0].emission().x, 1.0f, 1e-6f);
+  EXPECT_EQ(back->meshTriangleCount(), 6u * 110u * 110u * 2u);
+}
+
+TEST(GltfExport, FailedSaveLeavesNoFile) {
+  const Scene scene = makeCornellBox();
+  const std::string dir = test::tempDir("export_fail");
+  // A folder that cannot exist: its parent is a regular file (works even when run as root).
+  { std::ofstream(dir + "/blocker") << "x"; }
+  Status s = saveGltf(scene, dir + "/blocker/out.gltf");
+  ASSERT_FALSE(s.isOk());
+  EXPECT_NE(s.message().find("blocker/out"), std::string::npos) << s.message();
+  EXPECT_EQ(filesIn(dir), (std::vector<std::string>{"blocker"}));
+
+  // The .bin is written first and the .gltf fails: a folder squats on the .gltf's temporary
+  // name (not empty, so cleaning up the temporaries cannot remove it). The .bin must not be
+  // left behind either.
+  const std::string squatter = ".out.gltf.tmp" + std::to_string(::getpid());
+  fs::create_directory(dir + "/" + squatter);
+  { std::ofstream(dir + "/" + squatter + "/keep") << "x"; }
+  s = saveGltf(scene, dir + "/out.gltf");
+  ASSERT_FALSE(s.isOk());
+  EXPECT_NE(s.message().find("out.gltf"), std::string::npos) << s.message();
+  EXPECT_EQ(filesIn(dir), (std::vector<std::string>{squatter, "blocker"}));
+}
+
+TEST(GltfExport, InconsistentPrimitiveIsAnError) {
+  Scene scene = makeCornellBox();
+  scene.meshes[2].primitives[0].uv1.resize(3);
+  const std::string dir = test::tempDir("export_bad");
+  Status s = saveGltf(scene, dir + "/bad.gltf");
+  ASSERT_FALSE(s.isOk());
+  EXPECT_NE(s.message().find("back_wall"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("TEXCOORD_1"), std::string::npos) << s.message();
+  EXPECT_TRUE(filesIn(dir).empty());
+}
+
+TEST(GltfExport, TextureUrisAreRelativeToTheOutput) {
+  const std::string dir = test::tempDir("export_textures");
+  Scene scene = makeCornellBox();
+  scene.sourcePath = dir + "/levels/source/level.gltf";
+  Texture fileTex;
+  fileTex.name = "bricks";
+  fileTex.uri = "tex/my%20bricks.png";  // as written in the source glTF: URI-encoded
+  Texture embedded;
+  embedded.name = "from_glb";  // uri "" = embedded in the source: nothing to point at
+  scene.textures = {fileTex, embedded, fileTex};
+  scene.materials[0].baseColorTexture.texture = 0;
+  scene.materials[0].baseColorTexture.hasTransform = true;
+  scene.materials[0].baseColorTexture.scale = {2.0f, 3.0f};
+  scene.materials[0].baseColorTexture.rotation = 0.5f;
+  scene.materials[1].baseColorTexture.texture = 1;
+  scene.materials[2].emissiveTexture.texture = 2;
+  scene.materials[2].emissiveTexture.texCoord = 1;
+  ASSERT_TRUE(saveGltf(scene, dir + "/levels/out/level.gltf").isOk());
+  const json doc = readJson(dir + "/levels/out/level.gltf");
+  // Both file textures share one image; the embedded one is dropped.
+  ASSERT_EQ(doc["images"].size(), 1u);
+  EXPECT_EQ(doc["images"][0]["uri"], "../source/tex/my%20bricks.png");
+  ASSERT_EQ(doc["textures"].size(), 2u);
+  const json& white = doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"];
+  EXPECT_EQ(white["index"], 0);
+  EXPECT_EQ(white["extensions"]["KHR_texture_transform"]["scale"], json::array({2.0, 3.0}));
+  EXPECT_EQ(white["extensions"]["KHR_texture_transform"]["rotation"], 0.5);
+  EXPECT_FALSE(white["extensions"]["KHR_texture_transform"].contains("offset"));
+  EXPECT_FALSE(doc["materials"][1]["pbrMetallicRoughness"].contains("baseColorTexture"));
+  EXPECT_EQ(doc["materials"][2]["emissiveTexture"], (json{{"index", 1}, {"texCoord", 1}}));
+  EXPECT_EQ(doc["extensionsRequired"], json::array({"KHR_texture_transform"}));
+}
+
+TEST(GltfExport, SponzaRoundTrip) {
+  AG_REQUIRE_SHARED_SCENE(path, "sponza/Sponza.gltf");
+  LoadOptions options;
+  options.loadTextures = false;
+  Result<Scene> original = loadGltf(path, options);
+  ASSERT_TRUE(original.isOk()) << original.message();
+  EXPECT_EQ(original->meshes.size(), 44u);
+  const std::string dir = test::tempDir("export_sponza");
+  Status s = saveGltf(original.value(), dir + "/sponza.gltf");
+  ASSERT_TRUE(s.isOk()) << s.message();
+  Result<Scene> back = loadGltf(dir + "/sponza.gltf", options);
+  ASSERT_TRUE(back.isOk()) << back.message();
+  EXPECT_EQ(back->meshes.size(), 44u);
+  EXPECT_EQ(back->instances.size(), 170u);
+  EXPECT_EQ(back->instancedTriangleCount(), 262087u);
+  EXPECT_EQ(back->meshTriangleCount(), original->meshTriangleCount());
+  expectSameMaterials(original.value(), back.value());
+  // Texture URIs now point back into the shared folder and still name existing files.
+  const json doc = readJson(dir + "/sponza.gltf");
+  ASSERT_TRUE(doc.contains("images"));
+  for (const json& image : doc["images"]) {
+    const std::string uri = image["uri"];
+    EXPECT_TRUE(fs::exists(fs::path(dir) / uri)) << uri;
+  }
+  std::set<std::string> names, backNames;
+  for (const Texture& t : original->textures) names.insert(fs::path(t.uri).filename().string());
+  for (const Texture& t : back->textures) backNames.insert(fs::path(t.uri).filename().string());
+  EXPECT_EQ(names, backNames);
+}
+
+TEST(GltfExport, MixedLightingKeepsUv1AndTextureTransforms) {
+  AG_REQUIRE_SHARED_SCENE(path, "mixed_lighting_bevy/MixedLightingExample.gltf");
+  LoadOptions options;
+  options.loadTextures = false;
+  Result<Scene> original = loadGltf(path, options);
+  ASSERT_TRUE(original.isOk()) << original.message();
+  const std::string dir = test::tempDir("export_mixed");
+  Status s = saveGltf(original.value(), dir + "/mixed.glb");
+  ASSERT_TRUE(s.isOk()) << s.message();
+  Result<Scene> back = loadGltf(dir + "/mixed.glb", options);
+  ASSERT_TRUE(back.isOk()) << back.message();
+  expectSameGeometry(original.value(), back.value());
+  expectSameMaterials(original.value(), back.value());
+  expectSameInstances(original.value(), back.value());
+  EXPECT_EQ(back->lights.size(), original->lights.size());
+
+  size_t withUv1 = 0;
+  for (const Mesh& m : back->meshes)
+    for (const Primitive& p : m.primitives) withUv1 += p.uv1.empty() ? 0 : 1;
+  EXPECT_GT(withUv1, 0u);
+
+  size_t transforms = 0;
+  auto sameRef = [&](const TextureRef& a, const TextureRef& b, const Scene& sa, const Scene& sb,
+                     const std::string& what) {
+    ASSERT_EQ(a.valid(), b.valid()) << what;
+    if (!a.valid()) return;
+    EXPECT_EQ(fs::path(sa.textures[size_t(a.texture)].uri).filename(),
+              fs::path(sb.textures[size_t(b.texture)].uri).filename())
+        << what;
+    EXPECT_EQ(a.texCoord, b.texCoord) << what;
+    EXPECT_EQ(a.hasTransform, b.hasTransform) << what;
+    EXPECT_EQ(a.offset, b.offset) << what;
+    EXPECT_EQ(a.scale, b.scale) << what;
+    EXPECT_EQ(a.rotation, b.rotation) << what;
+    transforms += a.hasTransform ? 1 : 0;
+  };
+  for (size_t i = 0; i < original->materials.size(); ++i) {
+    const Material& a = original->materials[i];
+    const Material& b = back->materials[i];
+    sameRef(a.baseColorTexture, b.baseColorTexture, *original, *back, a.name + " base");
+    sameRef(a.metallicRoughnessTexture, b.metallicRoughnessTexture, *original, *back,
+            a.name + " mr");
+    sameRef(a.normalTexture, b.normalTexture, *original, *back, a.name + " normal");
+    sameRef(a.occlusionTexture, b.occlusionTexture, *original, *back, a.name + " occlusion");
+    sameRef(a.emissiveTexture, b.emissiveTexture, *original, *back, a.name + " emissive");
+  }
+  EXPECT_GE(transforms, 3u);  // wood base colour and metallic-roughness, fabric normal
+}
+
+}  // namespace
+}  // namespace afterglow::scenes
