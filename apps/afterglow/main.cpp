@@ -27,6 +27,9 @@ const char kMainHelp[] =
     "Commands:\n"
     "  uv SCENE -o OUT.gltf   generate (or check) lightmap UVs and pack them into atlases\n"
     "  info SCENE             print what afterglow loads from a scene\n"
+    "  bake SCENE -o OUT/     bake lightmaps (EXR + PNG), a glTF using them, and a report\n"
+    "  render SCENE.gltf -o VIEW.png\n"
+    "                         ray trace a view of a baked scene\n"
     "\n"
     "SCENE is a .gltf or .glb file, or a built-in scene: builtin:cornell, builtin:furnace.\n"
     "Run 'afterglow COMMAND --help' for a command's options.\n"
@@ -52,6 +55,10 @@ int main(int argc, char** argv) {
       std::printf("%s\n%s", kUvHelp, kExitCodesHelp);
     else if (topic == "info")
       std::printf("%s\n%s", kInfoHelp, kExitCodesHelp);
+    else if (topic == "bake")
+      std::printf("%s\n%s", kBakeHelp, kExitCodesHelp);
+    else if (topic == "render")
+      std::printf("%s\n%s", kRenderHelp, kExitCodesHelp);
     else
       std::printf("%s%s", kMainHelp, kExitCodesHelp);
     return kExitOk;
@@ -62,6 +69,8 @@ int main(int argc, char** argv) {
   }
   if (command == "uv") return runUv(argc, argv, 2);
   if (command == "info") return runInfo(argc, argv, 2);
+  if (command == "bake") return runBake(argc, argv, 2);
+  if (command == "render") return runRender(argc, argv, 2);
   printError((command[0] == '-' ? "unknown option '" : "unknown command '") + command +
              "' (see afterglow --help)");
   return kExitUsage;

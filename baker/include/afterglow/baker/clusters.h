@@ -13,6 +13,8 @@ namespace afterglow::baker {
 struct ClusterOptions {
   float clusterSize = 0.5f;        // metres: target edge length of a cluster
   float maxNormalAngleDeg = 35.0f; // degrees: texels in a cluster stay within this normal cone
+  int minTexels = 4;               // count: smaller clusters join a neighbour whose normal agrees
+                                   //   (when the merged cluster still fits the cone); <= 1: off
 };
 
 struct Clusters {
@@ -21,7 +23,8 @@ struct Clusters {
   std::vector<glm::vec3> position;     // area-weighted centre
   std::vector<glm::vec3> normal;       // area-weighted mean normal (unit)
   std::vector<float> area;             // m²
-  std::vector<uint32_t> material;      // index into Scene::materials (of its texels)
+  std::vector<uint32_t> material;      // index into Scene::materials (of its texels); ~0u for
+                                       //   glTF's default material (primitive material -1)
   std::vector<glm::vec3> albedo;       // mean diffuse albedo (texture × factor), linear
   std::vector<glm::vec3> emission;     // mean emitted radiance, linear
   std::vector<uint32_t> firstTexel;    // texels of cluster c: memberTexels[firstTexel[c] ..

@@ -17,7 +17,9 @@ namespace afterglow::baker {
 class RayTracer;
 
 struct TexelOptions {
-  // Rays cast around each sample point to find geometry it sits inside or behind.
+  // Rays cast around each sample point to find geometry it sits inside or behind (tangent rays
+  // of 1.5 texels push it out; as many hemisphere rays mark it invalid when most of them see
+  // back faces of single-sided geometry).
   int leakRays = 8;               // count
   // How far a sample is pushed off its surface (self-intersection epsilon), as a fraction of
   // the texel's world size, never below minOffset.

@@ -1,0 +1,185 @@
+// afterglow render: a ray-traced picture of a baked scene (albedo × lightmap + emission).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <string>
+
+#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/render.h"
+#include "afterglow/core/parallel.h"
+#include "afterglow/scenes/gltf.h"
+#include "args.h"
+#include "commands.h"
+#include "common.h"
+
+namespace afterglow::cli {
+
+const char kRenderHelp[] =
+    "Usage: afterglow render SCENE.gltf -o VIEW.png [options]\n"
+    "\n"
+    "Ray traces a view of a scene written by 'afterglow bake' and shades every visible surface\n"
+    "with its diffuse albedo x its lightmap (the EXR files the bake wrote, found through the\n"
+    "glTF's MOZ_lightmap materials) + its emission, then tone maps to an sRGB PNG. Surfaces\n"
+    "without a lightmap (dynamic instances) show only their emission.\n"
+    "\n"
+    "Options:\n"
+    "  -o, --output VIEW.png    output picture; required\n"
+    "  --camera NAME            view from the glTF camera NAME (default: the first camera)\n"
+    "  --look-from X,Y,Z        view from this point (with --look-at) instead of a camera\n"
+    "  --look-at X,Y,Z          point the view at this point\n"
+    "  --fov DEG                vertical field of view in degrees (default: the camera's, or 45)\n"
+    "  --width N, --height N    picture size in pixels (default 640 x 480)\n"
+    "  --exposure X             scale by 2^X before tone mapping (default: automatic, the\n"
+    "                           99th percentile maps to 0.8)\n"
+    "  --threads N              worker threads (default: every core)\n"
+    "  --quiet                  no progress bar\n"
+    "  -h, --help               this help\n";
+
+namespace {
+
+bool parsePoint(const std::string& text, glm::vec3* out) {
+  float v[3];
+  const char* p = text.c_str();
+  for (int i = 0; i < 3; ++i) {
+    char* end = nullptr;
+    v[i] = std::strtof(p, &end);
+    if (end == p || !std::isfinite(v[i])) return false;
+    p = end;
+    if (i < 2) {
+      if (*p != ',') return false;
+      ++p;
+    }
+  }
+  if (*p != '\0') return false;
+  *out = glm::vec3(v[0], v[1], v[2]);
+  return true;
+}
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+}  // namespace
+
+int runRender(int argc, char** argv, int first) {
+  auto usage = [](const std::string& message) {
+    printError("render: " + message + " (see afterglow render --help)");
+    return int(kExitUsage);
+  };
+  Args args;
+  if (!args.parse(argc, argv, first,
+                  {{"output", 'o'},
+                   {"camera"},
+                   {"look-from"},
+                   {"look-at"},
+                   {"fov"},
+                   {"width"},
+                   {"height"},
+                   {"exposure"},
+                   {"threads"},
+                   {"quiet", 0, false},
+                   {"help", 'h', false}}))
+    return usage(args.error());
+  if (args.has("help")) {
+    std::printf("%s\n%s", kRenderHelp, kExitCodesHelp);
+    return kExitOk;
+  }
+  if (args.positional().size() != 1) return usage("wants exactly one SCENE.gltf");
+  const std::string input = args.positional()[0];
+  if (!args.has("output")) return usage("missing -o VIEW.png");
+  const std::string output = args.get("output");
+  if (!endsWith(output, ".png")) return usage("the output must end in .png, got '" + output + "'");
+  baker::RenderOptions options;
+  int threads = 0;
+  float fovDeg = 45.0f;
+  float exposure = std::numeric_limits<float>::quiet_NaN();
+  if (!args.getInt("width", 640, 1, 16384, &options.width) ||
+      !args.getInt("height", 480, 1, 16384, &options.height) ||
+      !args.getFloat("fov", 45.0f, 0.0f, 179.0f, &fovDeg) ||
+      !args.getInt("threads", 0, 0, 1024, &threads))
+    return usage(args.error());
+  if (args.has("exposure") && !args.getFloat("exposure", 0.0f, -100.0f, 100.0f, &exposure))
+    return usage(args.error());
+  glm::vec3 from(0.0f), at(0.0f);
+  const bool lookAt = args.has("look-from") || args.has("look-at");
+  if (lookAt) {
+    if (args.has("camera")) return usage("give --camera or --look-from/--look-at, not both");
+    if (!args.has("look-from") || !args.has("look-at"))
+      return usage("--look-from and --look-at go together");
+    if (!parsePoint(args.get("look-from"), &from))
+      return usage("--look-from wants X,Y,Z, got '" + args.get("look-from") + "'");
+    if (!parsePoint(args.get("look-at"), &at))
+      return usage("--look-at wants X,Y,Z, got '" + args.get("look-at") + "'");
+  }
+  setThreadCount(threads);
+  ConsoleProgress progress(stderr, args.has("quiet"));
+  InterruptGuard guard(progress);
+
+  bool badArgument = false;
+  Result<scenes::Scene> loaded = loadSceneArgument(input, true, &badArgument);
+  if (interrupted()) return kExitInterrupted;
+  if (!loaded) {
+    printError(loaded.message());
+    return badArgument ? kExitUsage : kExitBadInput;
+  }
+  const scenes::Scene& scene = loaded.value();
+  Result<std::vector<baker::LightmapImage>> lightmaps = baker::loadBakedLightmaps(input);
+  if (!lightmaps) {
+    printError(lightmaps.message());
+    return kExitBadInput;
+  }
+
+  const float fovRad = fovDeg * 3.14159265f / 180.0f;
+  baker::View view;
+  if (lookAt) {
+    view = baker::lookAtView(from, at, fovRad);
+  } else if (args.has("camera")) {
+    const std::string name = args.get("camera");
+    const scenes::Camera* camera = nullptr;
+    for (const scenes::Camera& c : scene.cameras)
+      if (c.name == name) camera = &c;
+    if (!camera) {
+      std::string names;
+      for (const scenes::Camera& c : scene.cameras) names += (names.empty() ? "" : ", ") + c.name;
+      printError("render: " + input + " has no camera '" + name + "'" +
+                 (names.empty() ? std::string(" (it has no cameras)") : " (it has: " + names + ")"));
+      return kExitBadInput;
+    }
+    view = baker::cameraView(*camera);
+    if (args.has("fov")) view.yfov = fovRad;
+  } else if (!scene.cameras.empty()) {
+    view = baker::cameraView(scene.cameras.front());
+    if (args.has("fov")) view.yfov = fovRad;
+  } else {
+    view = baker::defaultView(scene, fovRad);
+  }
+
+  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  if (!tracer) {
+    printError(tracer.message());
+    return kExitBadInput;
+  }
+  Result<std::vector<glm::vec3>> image =
+      baker::renderBaked(scene, *tracer.value(), lightmaps.value(), view, options, progress);
+  if (interrupted() || progress.cancelled()) {
+    printError("interrupted; nothing written");
+    return kExitInterrupted;
+  }
+  if (!image) {
+    printError(image.message());
+    return kExitBadInput;
+  }
+  if (Status st = baker::writeRenderPng(output, options.width, options.height, image.value(),
+                                        exposure);
+      !st) {
+    printError(st.message());
+    return kExitOutput;
+  }
+  if (!args.has("quiet")) std::printf("wrote         %s (%dx%d)\n", output.c_str(), options.width,
+                                      options.height);
+  return kExitOk;
+}
+
+}  // namespace afterglow::cli

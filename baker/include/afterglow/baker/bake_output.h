@@ -1,0 +1,48 @@
+// The files of `afterglow bake`: lightmaps (EXR data + PNG preview), the glTF with the lightmaps
+// attached through MOZ_lightmap, and report.json. Everything goes through one AtomicOutput that
+// the caller commits, so a failed or interrupted bake leaves nothing behind.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/baker/bake.h"
+#include "afterglow/core/atomic_file.h"
+#include "afterglow/core/status.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::baker {
+
+// What the report records besides the bake itself.
+struct BakeReportInfo {
+  std::string version;                   // afterglow version string
+  std::string input;                     // the SCENE argument
+  std::string settingsJson = "{}";       // the effective settings, a JSON object
+  std::vector<StageTime> extraStages;    // stages before the bake (load, uv), seconds
+  std::vector<std::string> warnings;     // scene loading and unwrap warnings
+};
+
+// Writes OUT/lightmaps/lightmap<i>.exr and .png, OUT/scene.gltf (+ scene.bin) and
+// OUT/report.json into `out` (not committed). Returns the final paths.
+Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
+                                                  const BakeResult& result,
+                                                  const std::string& outDir,
+                                                  const BakeReportInfo& info, AtomicOutput& out);
+
+// Linear half-float RGB EXR, row 0 = v 0 (glTF's image orientation).
+Status writeExr(const std::string& path, int width, int height,
+                const std::vector<glm::vec3>& pixels, AtomicOutput& out);
+// 8-bit sRGB PNG from linear RGB: pixels × exposure, Reinhard tone map, sRGB encode.
+Status writeTonemappedPng(const std::string& path, int width, int height,
+                          const std::vector<glm::vec3>& pixels, float exposure,
+                          AtomicOutput& out);
+// The exposure that maps the 99th percentile luminance of the given pixels (those with a
+// non-zero mask entry, or all when the mask is empty) to 0.8 after the Reinhard curve.
+float autoExposure(const std::vector<glm::vec3>& pixels, const std::vector<uint8_t>& mask = {});
+
+// Peak resident memory of this process so far, bytes (getrusage).
+size_t peakMemoryBytes();
+
+}  // namespace afterglow::baker

@@ -1,0 +1,64 @@
+// `afterglow render`: a ray-traced picture of a baked scene, so a person can see the bake. Each
+// pixel traces primary rays (a fixed 2×2 grid, deterministic) and shades the first hit with
+// diffuse albedo × lightmap (bilinear at TEXCOORD_1) + emission; misses and dynamic instances
+// (no lightmap) get no light. The output is linear HDR; tone mapping happens on write.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/core/progress.h"
+#include "afterglow/core/status.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::baker {
+
+class RayTracer;
+
+// A pinhole camera in world space.
+struct View {
+  glm::vec3 position{0.0f};
+  glm::vec3 forward{0.0f, 0.0f, -1.0f};  // unit
+  glm::vec3 up{0.0f, 1.0f, 0.0f};        // unit, orthogonal to forward
+  float yfov = 0.8f;                     // radians, vertical field of view
+};
+
+// The view of a glTF camera (camera to world, looking down −Z with +Y up).
+View cameraView(const scenes::Camera& camera);
+// A view from `from` toward `at`, +Y up (or +Z when looking straight up or down).
+View lookAtView(glm::vec3 from, glm::vec3 at, float yfov);
+// A view of the whole scene from above its −Z side, for scenes without cameras.
+View defaultView(const scenes::Scene& scene, float yfov);
+
+struct RenderOptions {
+  int width = 640;         // pixels
+  int height = 480;        // pixels
+  int samplesPerAxis = 2;  // primary rays per pixel = samplesPerAxis²
+};
+
+// One atlas's lightmap (linear E/π), row 0 at v = 0.
+struct LightmapImage {
+  int width = 0;
+  int height = 0;
+  std::vector<glm::vec3> pixels;
+};
+
+// Loads the lightmaps `afterglow bake` attached to a glTF: the EXR files listed in the
+// document's extras.afterglow.lightmaps (falling back to every MOZ_lightmap extension's
+// extras.afterglow.exr), indexed by atlas. Errors name the file.
+Result<std::vector<LightmapImage>> loadBakedLightmaps(const std::string& gltfPath);
+
+// Renders the scene; returns width*height linear RGB, row 0 at the top of the picture.
+Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const RayTracer& tracer,
+                                           const std::vector<LightmapImage>& lightmaps,
+                                           const View& view, const RenderOptions& options = {},
+                                           Progress& progress = nullProgress());
+
+// Writes a tone-mapped sRGB PNG atomically. exposureStops NaN = automatic (the 99th percentile
+// maps to 0.8 after the tone curve); otherwise the image is scaled by 2^exposureStops.
+Status writeRenderPng(const std::string& path, int width, int height,
+                      const std::vector<glm::vec3>& image, float exposureStops);
+
+}  // namespace afterglow::baker

@@ -1,0 +1,271 @@
+// The whole bake (texels, clusters, links, direct, solve, dilation) on closed and small scenes
+// with known answers: the white furnace, bounce intensity 0, linearity in a light's intensity,
+// and bit-identical output whatever the thread count.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+
+#include "afterglow/baker/bake.h"
+#include "afterglow/core/parallel.h"
+#include "afterglow/runtime/solver.h"
+#include "afterglow/scenes/procedural.h"
+#include "afterglow/uv/unwrap.h"
+#include "../baker/src/lightmap_post.h"
+#include "../baker/src/sky_image.h"
+#include "test_util.h"
+
+namespace afterglow::baker {
+namespace {
+
+BakeOptions draftOptions() {
+  BakeOptions o;
+  o.links.texelRays = 32;
+  o.links.clusterRays = 128;
+  o.direct.lightSamples = 4;
+  o.direct.emissiveSamples = 16;
+  return o;
+}
+
+void unwrapAt(scenes::Scene& scene, float texelsPerUnit) {
+  uv::UnwrapOptions u;
+  u.pack.texelsPerUnit = texelsPerUnit;
+  Result<uv::UnwrapResult> r = uv::unwrap(scene, u);
+  ASSERT_TRUE(r) << r.message();
+}
+
+// The Cornell box lit by a directional light through its open side, with the ceiling lamp
+// switched off, so every texel's light comes from that one light.
+scenes::Scene sunlitCornell(float intensity, float bounceIntensity) {
+  scenes::Scene scene = scenes::makeCornellBox();
+  for (scenes::Material& m : scene.materials) m.emissiveFactor = glm::vec3(0.0f);
+  scenes::Light sun;
+  sun.name = "sun";
+  sun.type = scenes::LightType::Directional;
+  sun.direction = glm::normalize(glm::vec3(0.25f, -0.6f, 1.0f));
+  sun.intensity = intensity;
+  sun.color = glm::vec3(1.0f, 0.9f, 0.8f);
+  sun.bounceIntensity = bounceIntensity;
+  scene.lights.push_back(sun);
+  return scene;
+}
+
+BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
+  Result<BakeResult> r = bake(scene, options);
+  EXPECT_TRUE(r) << r.message();
+  return r ? std::move(r.value()) : BakeResult{};
+}
+
+class WhiteFurnace : public ::testing::TestWithParam<float> {};
+
+TEST_P(WhiteFurnace, EveryValidTexelIsLeOverOneMinusAlbedo) {
+  const float albedo = GetParam();
+  scenes::FurnaceOptions f;
+  f.albedo = glm::vec3(albedo);
+  f.emission = glm::vec3(1.0f);
+  scenes::Scene scene = scenes::makeFurnaceBox(f);
+  // ρ is the diffuse albedo the baker reflects with, which adds Unity's meta-pass specular
+  // share (0.02 for this dielectric) to the base colour: take it off the base colour.
+  for (int m = 0; m < int(scene.materials.size()); ++m) {
+    const glm::vec3 share = diffuseAlbedo(scene, m, glm::vec2(0.0f)) -
+                            glm::vec3(scene.materials[size_t(m)].baseColorFactor);
+    scene.materials[size_t(m)].baseColorFactor = glm::vec4(glm::vec3(albedo) - share, 1.0f);
+  }
+  for (int m = 0; m < int(scene.materials.size()); ++m)
+    ASSERT_NEAR(diffuseAlbedo(scene, m, glm::vec2(0.0f)).x, albedo, 1e-6f);
+  unwrapAt(scene, 8.0f);
+  BakeOptions options = draftOptions();
+  // Enough samples that Monte Carlo noise stays well inside the 1% (the 0.9 furnace amplifies
+  // any error tenfold).
+  options.links.texelRays = 256;
+  options.links.clusterRays = 1024;
+  options.direct.emissiveSamples = 4096;
+  options.solve.tolerance = 1e-7f;  // ρ = 0.9 converges slowly; the test is about transport
+  BakeResult r = bakeOrDie(scene, options);
+  ASSERT_GT(r.texels.size(), 300u);
+  const float expected = 1.0f / (1.0f - albedo);
+  size_t checked = 0;
+  float worst = 0.0f;
+  for (size_t a = 0; a < r.lightmaps.size(); ++a) {
+    const runtime::AtlasLayout& layout = r.texels.atlases[a];
+    for (size_t p = 0; p < layout.texelOfPixel.size(); ++p) {
+      const uint32_t t = layout.texelOfPixel[p];
+      if (t == runtime::kNoTexel || !r.texels.valid[t]) continue;
+      const glm::vec3 v = r.lightmaps[a][p];
+      for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(v[k] / expected - 1.0f));
+      ++checked;
+    }
+  }
+  EXPECT_LT(worst, 0.01f) << "worst relative error over " << checked << " texels";
+  EXPECT_GT(checked, r.texels.size() * 9 / 10);
+  std::printf("furnace rho %.1f: worst relative error %.4f over %zu texels\n", albedo, worst,
+              checked);
+}
+
+INSTANTIATE_TEST_SUITE_P(Albedo, WhiteFurnace, ::testing::Values(0.5f, 0.9f));
+
+TEST(Bake, BounceIntensityZeroGivesDirectLightOnly) {
+  scenes::Scene scene = sunlitCornell(3.0f, 0.0f);
+  unwrapAt(scene, 24.0f);
+  BakeResult r = bakeOrDie(scene, draftOptions());
+  ASSERT_GT(r.texels.size(), 0u);
+
+  // Direct light only: the same transport with no bounce pass at all.
+  runtime::TransportData data = r.transport;
+  runtime::Solver direct(data);
+  direct.reset();
+  std::vector<glm::vec3> directOnly;
+  direct.gatherTexels(directOnly);
+  float maxDirect = 0.0f;
+  size_t compared = 0;
+  for (size_t a = 0; a < r.lightmaps.size(); ++a) {
+    const runtime::AtlasLayout& layout = r.texels.atlases[a];
+    for (size_t p = 0; p < layout.texelOfPixel.size(); ++p) {
+      const uint32_t t = layout.texelOfPixel[p];
+      if (t == runtime::kNoTexel || !r.texels.valid[t]) continue;
+      for (int k = 0; k < 3; ++k) ASSERT_EQ(r.lightmaps[a][p][k], directOnly[t][k]) << t;
+      maxDirect = std::max(maxDirect, directOnly[t].x);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 0u);
+  EXPECT_GT(maxDirect, 0.1f);
+
+  // With the light's bounce back at 1 the same transport does carry indirect light, so the
+  // equality above is not vacuous.
+  for (runtime::Source& s : data.sources)
+    if (s.kind == runtime::SourceKind::Light) s.bounceIntensity = 1.0f;
+  runtime::Solver bounced(data);
+  bounced.solve();
+  std::vector<glm::vec3> withBounce;
+  bounced.gatherTexels(withBounce);
+  double gained = 0.0;
+  for (uint32_t t = 0; t < r.texels.size(); ++t) gained += withBounce[t].x - directOnly[t].x;
+  EXPECT_GT(gained / r.texels.size(), 1e-3);
+}
+
+TEST(Bake, DoublingALightDoublesEveryTexel) {
+  scenes::Scene once = sunlitCornell(2.0f, 1.0f);
+  unwrapAt(once, 24.0f);
+  scenes::Scene twice = once;
+  twice.lights[0].intensity = 4.0f;
+  const BakeResult a = bakeOrDie(once, draftOptions());
+  const BakeResult b = bakeOrDie(twice, draftOptions());
+  ASSERT_EQ(a.lightmaps.size(), b.lightmaps.size());
+  ASSERT_FALSE(a.lightmaps.empty());
+  float peak = 0.0f;
+  for (size_t i = 0; i < a.lightmaps.size(); ++i) {
+    ASSERT_EQ(a.lightmaps[i].size(), b.lightmaps[i].size());
+    for (size_t p = 0; p < a.lightmaps[i].size(); ++p)
+      for (int k = 0; k < 3; ++k) {
+        const float want = 2.0f * a.lightmaps[i][p][k];
+        ASSERT_NEAR(b.lightmaps[i][p][k], want, 1e-5f * std::max(std::abs(want), 1e-20f))
+            << "atlas " << i << " pixel " << p;
+        peak = std::max(peak, want);
+      }
+  }
+  EXPECT_GT(peak, 0.1f);
+}
+
+TEST(Bake, BitIdenticalWithOneAndTwoThreads) {
+  scenes::Scene scene = scenes::makeCornellBox();
+  scene.lights.push_back(sunlitCornell(1.0f, 1.0f).lights[0]);
+  unwrapAt(scene, 24.0f);
+  setThreadCount(1);
+  const BakeResult one = bakeOrDie(scene, draftOptions());
+  setThreadCount(2);
+  const BakeResult two = bakeOrDie(scene, draftOptions());
+  setThreadCount(0);
+  ASSERT_EQ(one.lightmaps.size(), two.lightmaps.size());
+  ASSERT_FALSE(one.lightmaps.empty());
+  for (size_t i = 0; i < one.lightmaps.size(); ++i) {
+    ASSERT_EQ(one.lightmaps[i].size(), two.lightmaps[i].size());
+    EXPECT_EQ(0, std::memcmp(one.lightmaps[i].data(), two.lightmaps[i].data(),
+                             one.lightmaps[i].size() * sizeof(glm::vec3)))
+        << "atlas " << i;
+  }
+  EXPECT_EQ(one.raysTraced, two.raysTraced);
+}
+
+TEST(Bake, StagesAreTimedAndCancellationStops) {
+  scenes::Scene scene = scenes::makeFurnaceBox();
+  unwrapAt(scene, 4.0f);
+  const BakeResult r = bakeOrDie(scene, draftOptions());
+  std::vector<std::string> names;
+  for (const StageTime& s : r.stages) {
+    names.push_back(s.name);
+    EXPECT_GE(s.seconds, 0.0);
+  }
+  for (const char* want : {"raytracer", "texels", "clusters", "links", "direct", "solve", "dilate"})
+    EXPECT_NE(std::find(names.begin(), names.end(), want), names.end()) << want;
+  EXPECT_GT(r.raysTraced, 0u);
+
+  Progress cancelled;
+  cancelled.cancel();
+  Result<BakeResult> stopped = bake(scene, draftOptions(), cancelled);
+  ASSERT_FALSE(stopped);
+  EXPECT_EQ(stopped.message(), "cancelled");
+}
+
+// Writes a lat-long EXR whose radiance is f(direction) (the image layout of projectEquirectSky).
+template <class F>
+std::string writeSky(const std::string& path, int w, int h, F f) {
+  std::vector<float> px(size_t(w) * size_t(h) * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double theta = 3.14159265358979 * (y + 0.5) / h;
+      const double phi = 2.0 * 3.14159265358979 * (x + 0.5) / w;
+      const glm::vec3 d(float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)),
+                        float(std::sin(theta) * std::sin(phi)));
+      const glm::vec3 v = f(d);
+      for (int k = 0; k < 3; ++k) px[(size_t(y) * size_t(w) + size_t(x)) * 3 + size_t(k)] = v[k];
+    }
+  auto out = OIIO::ImageOutput::create(path);
+  EXPECT_TRUE(out);
+  EXPECT_TRUE(out->open(path, OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT)));
+  EXPECT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, px.data()));
+  out->close();
+  return path;
+}
+
+TEST(SkyImage, ConstantSkyMatchesConstantShAndAGradientLandsInY1) {
+  const std::string dir = test::tempDir("bake_sky_image");
+  glm::vec3 sh[runtime::kShCount], want[runtime::kShCount];
+  const glm::vec3 colour(0.5f, 1.0f, 2.0f);
+  ASSERT_TRUE(projectEquirectSky(writeSky(dir + "/constant.exr", 128, 64,
+                                          [&](glm::vec3) { return colour; }),
+                                 sh));
+  runtime::constantSkySh(colour, want);
+  for (int i = 0; i < runtime::kShCount; ++i)
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(sh[i][k], want[i][k], 2e-3f * want[0][k]) << i;
+  // L = 1 + y: the y term projects onto Y1-1 with 0.488603 · 4π/3.
+  ASSERT_TRUE(projectEquirectSky(writeSky(dir + "/gradient.exr", 128, 64,
+                                          [](glm::vec3 d) { return glm::vec3(1.0f + d.y); }),
+                                 sh));
+  EXPECT_NEAR(sh[1].x, 0.488603f * 4.0f * 3.14159265f / 3.0f, 5e-3f);
+  EXPECT_NEAR(sh[2].x, 0.0f, 5e-3f);
+  EXPECT_NEAR(sh[3].x, 0.0f, 5e-3f);
+  EXPECT_FALSE(projectEquirectSky(dir + "/missing.exr", sh));
+}
+
+TEST(LightmapPost, InvalidTexelsFillFromNeighboursThenChartsDilate) {
+  // 5×1 row: valid 1, invalid, valid 3, empty, empty.
+  std::vector<glm::vec3> image = {glm::vec3(1.0f), glm::vec3(100.0f), glm::vec3(3.0f),
+                                  glm::vec3(0.0f), glm::vec3(0.0f)};
+  std::vector<uint8_t> state = {kPixelValid, kPixelInvalid, kPixelValid, kPixelEmpty,
+                                kPixelEmpty};
+  EXPECT_EQ(fillInvalidPixels(5, 1, image, state), 1u);
+  EXPECT_FLOAT_EQ(image[1].x, 2.0f);
+  EXPECT_EQ(dilatePixels(5, 1, image, state, 1), 1u);
+  EXPECT_FLOAT_EQ(image[3].x, 3.0f);
+  EXPECT_EQ(state[4], kPixelEmpty);  // one ring only
+  EXPECT_EQ(dilatePixels(5, 1, image, state, 5), 1u);
+  EXPECT_FLOAT_EQ(image[4].x, 3.0f);
+}
+
+}  // namespace
+}  // namespace afterglow::baker

@@ -1,0 +1,675 @@
+// Form factors, sky transfer, validity and unit direct light (baker/src/links.cpp, direct.cpp)
+// on hand-built scenes with analytic answers, checked also through the runtime Solver.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/transport_precompute.h"
+#include "afterglow/core/parallel.h"
+#include "afterglow/runtime/solver.h"
+#include "afterglow/scenes/procedural.h"
+#include "afterglow/uv/unwrap.h"
+
+namespace afterglow::baker {
+namespace {
+
+using scenes::Scene;
+constexpr float kPi = 3.14159265358979323846f;
+constexpr float kY00 = 0.282094791773878f;  // 1 / (2√π)
+
+scenes::Material material(const std::string& name, glm::vec3 albedo, glm::vec3 emission = {}) {
+  scenes::Material m;
+  m.name = name;
+  m.baseColorFactor = glm::vec4(albedo, 1.0f);
+  m.metallicFactor = 0.0f;
+  m.roughnessFactor = 0.0f;  // no meta-pass specular share: the diffuse albedo is exactly albedo
+  m.emissiveFactor = emission;
+  return m;
+}
+
+// Hand-built scenes with texels on a regular grid per quad and square blocks of texels as
+// clusters, so the tests do not depend on the rasteriser or the clusterer.
+struct Builder {
+  Scene scene;
+  TexelSet texels;
+  Clusters clusters;
+  std::vector<std::vector<uint32_t>> groups;
+
+  // The parallelogram corner + [0,1]·e1 + [0,1]·e2, front normal e1 × e2, uv1 = (s, t) over
+  // an n×n atlas of its own. block = texels per cluster edge; n = 0 gives no lightmap.
+  int addQuad(glm::vec3 corner, glm::vec3 e1, glm::vec3 e2, int n, int block, int mat,
+              bool isStatic = true) {
+    const glm::vec3 normal = glm::normalize(glm::cross(e1, e2));
+    scenes::Primitive p;
+    p.material = mat;
+    p.positions = {corner, corner + e1, corner + e1 + e2, corner + e2};
+    p.normals.assign(4, normal);
+    p.uv0 = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    p.uv1 = p.uv0;
+    p.indices = {0, 1, 2, 0, 2, 3};
+    scenes::Mesh mesh;
+    mesh.name = "quad" + std::to_string(scene.meshes.size());
+    mesh.primitives.push_back(p);
+    scene.meshes.push_back(mesh);
+    scenes::Instance inst;
+    inst.name = mesh.name;
+    inst.mesh = int(scene.meshes.size()) - 1;
+    inst.isStatic = isStatic;
+    const uint32_t instance = uint32_t(scene.instances.size());
+    if (n > 0 && isStatic) {
+      inst.lightmap = {int(texels.atlases.size()), n, n};
+      runtime::AtlasLayout layout;
+      layout.width = layout.height = n;
+      layout.texelOfPixel.assign(size_t(n) * size_t(n), runtime::kNoTexel);
+      std::map<std::pair<int, int>, size_t> groupOfBlock;
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+          const uint32_t t = texels.size();
+          const float s = (float(i) + 0.5f) / float(n), u = (float(j) + 0.5f) / float(n);
+          layout.texelOfPixel[size_t(j) * size_t(n) + size_t(i)] = t;
+          texels.position.push_back(corner + s * e1 + u * e2 + 1e-4f * normal);
+          texels.normal.push_back(normal);
+          texels.geometricNormal.push_back(normal);
+          texels.area.push_back(glm::length(glm::cross(e1, e2)) / float(n * n));
+          texels.instance.push_back(instance);
+          texels.primitive.push_back(0);
+          texels.triangle.push_back(s >= u ? 0 : 1);
+          texels.uv0.push_back({s, u});
+          texels.atlas.push_back(uint16_t(inst.lightmap.atlas));
+          texels.pixel.push_back({uint16_t(i), uint16_t(j)});
+          texels.valid.push_back(1);
+          auto key = std::make_pair(i / block, j / block);
+          auto it = groupOfBlock.find(key);
+          if (it == groupOfBlock.end()) {
+            it = groupOfBlock.emplace(key, groups.size()).first;
+            groups.emplace_back();
+          }
+          groups[it->second].push_back(t);
+        }
+      }
+      texels.atlases.push_back(std::move(layout));
+    }
+    scene.instances.push_back(inst);
+    return int(instance);
+  }
+
+  void finish() {
+    clusters = Clusters();
+    clusters.texelCluster.assign(texels.size(), runtime::kNoTexel);
+    clusters.firstTexel.push_back(0);
+    for (uint32_t c = 0; c < groups.size(); ++c) {
+      float area = 0.0f;
+      glm::vec3 pos(0.0f), nrm(0.0f);
+      for (uint32_t t : groups[c]) {
+        clusters.texelCluster[t] = c;
+        clusters.memberTexels.push_back(t);
+        area += texels.area[t];
+        pos += texels.area[t] * texels.position[t];
+        nrm += texels.area[t] * texels.normal[t];
+      }
+      clusters.firstTexel.push_back(uint32_t(clusters.memberTexels.size()));
+      clusters.position.push_back(pos / area);
+      clusters.normal.push_back(glm::normalize(nrm));
+      clusters.area.push_back(area);
+      const int mat = scene.meshes[size_t(scene.instances[texels.instance[groups[c][0]]].mesh)]
+                          .primitives[0]
+                          .material;
+      clusters.material.push_back(uint32_t(mat));
+      const scenes::Material& m = scene.material(mat);
+      clusters.albedo.push_back(glm::vec3(m.baseColorFactor));
+      clusters.emission.push_back(m.emission());
+    }
+  }
+
+  std::unique_ptr<RayTracer> tracer() const {
+    auto result = RayTracer::build(scene);
+    EXPECT_TRUE(result.isOk()) << result.message();
+    return result.isOk() ? std::move(result.value()) : nullptr;
+  }
+};
+
+float rowSum(const runtime::SparseLinks& links, size_t row) {
+  float sum = 0.0f;
+  for (uint32_t k = links.rowStart[row]; k < links.rowStart[row + 1]; ++k) sum += links.weight[k];
+  return sum;
+}
+
+// Two coaxial parallel squares of side a at distance c (X = a / c), the standard closed form.
+double parallelSquaresFormFactor(double x) {
+  const double x2 = x * x;
+  return 2.0 / (kPi * x2) *
+         (std::log(std::sqrt((1 + x2) * (1 + x2) / (1 + 2 * x2))) +
+          2.0 * x * std::sqrt(1 + x2) * std::atan(x / std::sqrt(1 + x2)) - 2.0 * x * std::atan(x));
+}
+
+TEST(BakerTransport, ParallelSquaresFormFactorsRowsAndReciprocity) {
+  EXPECT_NEAR(parallelSquaresFormFactor(1.0), 0.1998, 1e-4);
+  Builder b;
+  b.scene.materials.push_back(material("grey", glm::vec3(0.5f)));
+  const int n = 16, block = 8;
+  b.addQuad({0, 0, 0}, {0, 0, 1}, {1, 0, 0}, n, block, 0);  // A, facing +Y
+  b.addQuad({0, 1, 0}, {1, 0, 0}, {0, 0, 1}, n, block, 0);  // B, facing -Y, 1 m above
+  b.finish();
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  LinkOptions opt;
+  opt.texelRays = 1024;
+  opt.clusterRays = 16384;
+  runtime::TransportData data;
+  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
+  ASSERT_EQ(data.texelCount, b.texels.size());
+  ASSERT_EQ(data.clusterCount, 8u);
+  ASSERT_EQ(data.texelLinks.rows(), size_t(2 * n * n));
+  ASSERT_EQ(data.clusterLinks.rows(), 8u);
+
+  // Area-weighted mean over A of each texel's links to B's clusters (4..7).
+  const uint32_t texelsA = uint32_t(n * n);
+  double fab = 0.0, areaA = 0.0;
+  for (uint32_t t = 0; t < 2 * texelsA; ++t) {
+    ASSERT_TRUE(b.texels.valid[t]) << t;
+    // Every ray either reaches a cluster or leaves to the sky: row + miss fraction = 1.
+    const float missFraction = data.texelSky[size_t(t) * runtime::kShCount] / kY00;
+    EXPECT_NEAR(rowSum(data.texelLinks, t) + missFraction, 1.0f, 1e-4f) << t;
+    for (uint32_t k = data.texelLinks.rowStart[t]; k < data.texelLinks.rowStart[t + 1]; ++k) {
+      const uint32_t c = data.texelLinks.target[k];
+      // Flat squares never see themselves.
+      EXPECT_EQ(c >= 4, t < texelsA) << "texel " << t << " links cluster " << c;
+      if (t < texelsA) fab += double(b.texels.area[t]) * data.texelLinks.weight[k];
+    }
+    if (t < texelsA) areaA += b.texels.area[t];
+  }
+  fab /= areaA;
+  // 262k stratified rays: sampling error well below 0.002.
+  EXPECT_NEAR(fab, parallelSquaresFormFactor(1.0), 0.003);
+
+  // Cluster -> cluster: reciprocity A_i F_ij = A_j F_ji, and the cluster rows against A's.
+  std::vector<std::vector<float>> f(8, std::vector<float>(8, 0.0f));
+  for (uint32_t c = 0; c < 8; ++c) {
+    const float miss = data.clusterSky[size_t(c) * runtime::kShCount] / kY00;
+    EXPECT_NEAR(rowSum(data.clusterLinks, c) + miss, 1.0f, 1e-4f);
+    for (uint32_t k = data.clusterLinks.rowStart[c]; k < data.clusterLinks.rowStart[c + 1]; ++k)
+      f[c][data.clusterLinks.target[k]] = data.clusterLinks.weight[k];
+  }
+  double clusterFab = 0.0;
+  for (uint32_t i = 0; i < 4; ++i) {
+    for (uint32_t j = 4; j < 8; ++j) {
+      const double ai = b.clusters.area[i], aj = b.clusters.area[j];
+      const double sigma = std::sqrt(std::max(f[i][j], 0.01f) / double(opt.clusterRays));
+      EXPECT_NEAR(ai * f[i][j], aj * f[j][i], 4.0 * ai * sigma) << i << "->" << j;
+      EXPECT_GT(f[i][j], 0.01f);
+      clusterFab += 0.25 * f[i][j];
+    }
+  }
+  EXPECT_NEAR(clusterFab, parallelSquaresFormFactor(1.0), 0.003);
+}
+
+TEST(BakerTransport, LinksAndDirectAreIndependentOfThreadCount) {
+  Builder b;
+  b.scene.materials.push_back(material("grey", glm::vec3(0.5f)));
+  b.scene.materials.push_back(material("lamp", glm::vec3(0.5f), glm::vec3(3.0f)));
+  b.addQuad({0, 0, 0}, {0, 0, 1}, {1, 0, 0}, 8, 4, 0);
+  b.addQuad({0, 0, 0}, {0, 1, 0}, {0, 0, 1}, 8, 4, 0);  // wall at x = 0 facing +X
+  b.addQuad({0.4f, 0.8f, 0.4f}, {0.2f, 0, 0}, {0, 0, 0.2f}, 2, 2, 1);  // lamp facing down
+  scenes::Light l;
+  l.type = scenes::LightType::Point;
+  l.position = {0.7f, 0.5f, 0.5f};
+  l.radius = 0.05f;
+  b.scene.lights.push_back(l);
+  b.finish();
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  LinkOptions opt;
+  opt.texelRays = 32;
+  opt.clusterRays = 64;
+  runtime::TransportData one, two;
+  const int saved = threadCount();
+  setThreadCount(1);
+  TexelSet texels1 = b.texels;
+  ASSERT_TRUE(computeLinks(b.scene, *tracer, texels1, b.clusters, opt, one).isOk());
+  ASSERT_TRUE(computeDirect(b.scene, *tracer, texels1, b.clusters, {}, one).isOk());
+  setThreadCount(2);
+  TexelSet texels2 = b.texels;
+  ASSERT_TRUE(computeLinks(b.scene, *tracer, texels2, b.clusters, opt, two).isOk());
+  ASSERT_TRUE(computeDirect(b.scene, *tracer, texels2, b.clusters, {}, two).isOk());
+  setThreadCount(saved);
+  ASSERT_EQ(one.sources.size(), 2u);  // the point light, then the lamp material
+  EXPECT_EQ(one.sources[1].kind, runtime::SourceKind::Emissive);
+  EXPECT_EQ(one.sources[1].material, 1u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(one.sources[i].texelTransfer, two.sources[i].texelTransfer);
+    EXPECT_EQ(one.sources[i].clusterTransfer, two.sources[i].clusterTransfer);
+  }
+  EXPECT_GT(one.sources[1].texelTransfer[0], 0.0f);
+  EXPECT_EQ(one.texelLinks.rowStart, two.texelLinks.rowStart);
+  EXPECT_EQ(one.texelLinks.target, two.texelLinks.target);
+  EXPECT_EQ(one.texelLinks.weight, two.texelLinks.weight);
+  EXPECT_EQ(one.clusterLinks.weight, two.clusterLinks.weight);
+  EXPECT_EQ(one.texelSky, two.texelSky);
+  EXPECT_GT(one.texelLinks.size(), 0u);
+}
+
+TEST(BakerTransport, OpenFloorSeesTheSkyAsSh) {
+  Builder b;
+  b.scene.materials.push_back(material("grey", glm::vec3(0.5f)));
+  b.addQuad({0, 0, 0}, {0, 0, 1}, {1, 0, 0}, 2, 2, 0);
+  b.finish();
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  LinkOptions opt;
+  opt.texelRays = 4096;
+  runtime::TransportData data;
+  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
+  EXPECT_EQ(data.texelLinks.size(), 0u);
+  for (uint32_t t = 0; t < 4; ++t) {
+    const float* sh = &data.texelSky[size_t(t) * runtime::kShCount];
+    EXPECT_FLOAT_EQ(sh[0], kY00);
+    // Cosine-weighted mean of the up axis is 2/3; the horizontal ones vanish.
+    EXPECT_NEAR(sh[1], 0.488603f * 2.0f / 3.0f, 0.003f);
+    EXPECT_NEAR(sh[3], 0.0f, 0.01f);
+    EXPECT_NEAR(sh[2], 0.0f, 0.01f);
+  }
+  // A constant sky of radiance L gives E/π = L through the runtime.
+  runtime::constantSkySh(glm::vec3(2.0f, 1.0f, 0.5f), data.skySh);
+  runtime::Solver solver(data);
+  solver.solve();
+  std::vector<glm::vec3> out;
+  solver.gatherTexels(out);
+  for (const glm::vec3& v : out) {
+    EXPECT_NEAR(v.x, 2.0f, 1e-5f);
+    EXPECT_NEAR(v.z, 0.5f, 1e-5f);
+  }
+}
+
+TEST(BakerTransport, BackFacesOfSingleSidedGeometryInvalidateTexels) {
+  Builder b;
+  b.scene.materials.push_back(material("grey", glm::vec3(0.5f)));
+  b.addQuad({0, 0, 0}, {0, 0, 1}, {1, 0, 0}, 4, 2, 0);
+  // A lid just above the left half of the floor, facing up: the texels below see its back.
+  b.addQuad({-1, 0.01f, -1}, {0, 0, 3}, {1.5f, 0, 0}, 0, 1, 0);
+  b.finish();
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  LinkOptions opt;
+  opt.texelRays = 256;
+  runtime::TransportData data;
+  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
+  int invalid = 0;
+  for (uint32_t t = 0; t < b.texels.size(); ++t) {
+    const bool covered = b.texels.position[t].x < 0.5f;
+    EXPECT_EQ(b.texels.valid[t] == 0, covered) << t;
+    if (!b.texels.valid[t]) {
+      ++invalid;
+      EXPECT_EQ(rowSum(data.texelLinks, t), 0.0f);
+      EXPECT_EQ(data.texelSky[size_t(t) * runtime::kShCount], 0.0f);
+    }
+  }
+  EXPECT_EQ(invalid, 8);
+}
+
+// A closed cube of six quads, every surface with albedo ρ and radiance Le: every texel's row
+// sums to 1, no sky, and the solved E/π is Le / (1 − ρ).
+TEST(BakerTransport, WhiteFurnaceConvergesToAnalyticRadiance) {
+  const float le = 1.0f;
+  Builder b;
+  b.scene.materials.push_back(material("furnace", glm::vec3(0.5f), glm::vec3(le)));
+  const int n = 8, block = 4;
+  b.addQuad({0, 0, 0}, {0, 0, 1}, {1, 0, 0}, n, block, 0);  // floor, +Y
+  b.addQuad({0, 1, 0}, {1, 0, 0}, {0, 0, 1}, n, block, 0);  // ceiling, -Y
+  b.addQuad({0, 0, 0}, {0, 1, 0}, {0, 0, 1}, n, block, 0);  // x = 0, +X
+  b.addQuad({1, 0, 0}, {0, 0, 1}, {0, 1, 0}, n, block, 0);  // x = 1, -X
+  b.addQuad({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, n, block, 0);  // z = 0, +Z
+  b.addQuad({0, 0, 1}, {0, 1, 0}, {1, 0, 0}, n, block, 0);  // z = 1, -Z
+  b.finish();
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  LinkOptions lopt;
+  lopt.texelRays = 256;
+  lopt.clusterRays = 1024;
+  DirectOptions dopt;
+  dopt.emissiveSamples = 4096;
+  runtime::TransportData data;
+  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, lopt, data).isOk());
+  ASSERT_TRUE(computeDirect(b.scene, *tracer, b.texels, b.clusters, dopt, data).isOk());
+  ASSERT_EQ(data.sources.size(), 1u);
+  EXPECT_EQ(data.sources[0].kind, runtime::SourceKind::Emissive);
+  ASSERT_EQ(data.materials.size(), 1u);
+  EXPECT_EQ(data.materials[0].albedo, glm::vec3(0.5f));
+  EXPECT_EQ(data.materials[0].emission, glm::vec3(le));
+  for (uint32_t t = 0; t < data.texelCount; ++t) {
+    ASSERT_TRUE(b.texels.valid[t]);
+    EXPECT_NEAR(rowSum(data.texelLinks, t), 1.0f, 1e-3f) << t;
+    EXPECT_NEAR(data.texelSky[size_t(t) * runtime::kShCount], 0.0f, 1e-3f * kY00) << t;
+  }
+  for (uint32_t c = 0; c < data.clusterCount; ++c)
+    EXPECT_NEAR(rowSum(data.clusterLinks, c), 1.0f, 1e-3f) << c;
+
+  for (float rho : {0.5f, 0.9f}) {
+    data.materials[0].albedo = glm::vec3(rho);
+    runtime::Solver solver(data);
+    runtime::SolveOptions sopt;
+    sopt.tolerance = 1e-6f;
+    solver.solve(sopt);
+    std::vector<glm::vec3> out;
+    solver.gatherTexels(out);
+    const float expected = le / (1.0f - rho);
+    float worst = 0.0f;
+    for (uint32_t t = 0; t < data.texelCount; ++t) {
+      worst = std::max(worst, std::abs(out[t].x - expected) / expected);
+    }
+    EXPECT_LT(worst, 0.01f) << "rho " << rho;
+  }
+}
+
+// The same furnace through the whole precompute: procedural box, generated UVs, rasterised
+// texels and computed clusters.
+TEST(BakerTransport, WhiteFurnaceThroughTexelsAndClusters) {
+  scenes::FurnaceOptions fo;
+  fo.albedo = glm::vec3(0.5f);
+  fo.emission = glm::vec3(1.0f);
+  Scene scene = scenes::makeFurnaceBox(fo);
+  scene.materials[0].roughnessFactor = 0.0f;  // no specular share: ρ is exactly 0.5
+  uv::UnwrapOptions uopt;
+  uopt.pack.texelsPerUnit = 16.0f;
+  ASSERT_TRUE(uv::unwrap(scene, uopt).isOk());
+  auto built = RayTracer::build(scene);
+  ASSERT_TRUE(built.isOk()) << built.message();
+  const RayTracer& tracer = *built.value();
+  Result<TexelSet> texelResult = computeTexels(scene, tracer);
+  ASSERT_TRUE(texelResult.isOk()) << texelResult.message();
+  TexelSet texels = std::move(texelResult.value());
+  const Clusters clusters = computeClusters(scene, texels);
+  ASSERT_GT(texels.size(), 1000u);
+  LinkOptions lopt;
+  lopt.texelRays = 256;
+  lopt.clusterRays = 512;
+  DirectOptions dopt;
+  dopt.emissiveSamples = 2048;
+  runtime::TransportData data;
+  ASSERT_TRUE(computeLinks(scene, tracer, texels, clusters, lopt, data).isOk());
+  ASSERT_TRUE(computeDirect(scene, tracer, texels, clusters, dopt, data).isOk());
+  ASSERT_EQ(data.materials.size(), 1u);
+  EXPECT_NEAR(data.materials[0].albedo.x, 0.5f, 1e-6f);
+  size_t valid = 0;
+  for (uint32_t t = 0; t < data.texelCount; ++t) {
+    if (!texels.valid[t]) continue;
+    ++valid;
+    EXPECT_NEAR(rowSum(data.texelLinks, t), 1.0f, 2e-3f) << t;
+  }
+  EXPECT_GT(valid, 0.95 * data.texelCount);
+  for (float rho : {0.5f, 0.9f}) {
+    data.materials[0].albedo = glm::vec3(rho);
+    runtime::Solver solver(data);
+    runtime::SolveOptions sopt;
+    sopt.tolerance = 1e-6f;
+    solver.solve(sopt);
+    std::vector<glm::vec3> out;
+    solver.gatherTexels(out);
+    const float expected = 1.0f / (1.0f - rho);
+    float worst = 0.0f;
+    for (uint32_t t = 0; t < data.texelCount; ++t)
+      if (texels.valid[t]) worst = std::max(worst, std::abs(out[t].x - expected) / expected);
+    EXPECT_LT(worst, 0.01f) << "rho " << rho;
+  }
+}
+
+// The Cornell box's ceiling light seen from a floor point: the explicit area-light
+// sampling against a brute-force quadrature of (1/π) ∫ cosθ cosθ' V / r² dA over the lamp.
+TEST(BakerTransport, CornellLampOnTheFloorMatchesQuadrature) {
+  Scene scene = scenes::makeCornellBox();
+  uv::UnwrapOptions uopt;
+  uopt.pack.texelsPerUnit = 48.0f;
+  ASSERT_TRUE(uv::unwrap(scene, uopt).isOk());
+  auto built = RayTracer::build(scene);
+  ASSERT_TRUE(built.isOk()) << built.message();
+  const RayTracer& tracer = *built.value();
+  Result<TexelSet> texelResult = computeTexels(scene, tracer);
+  ASSERT_TRUE(texelResult.isOk()) << texelResult.message();
+  TexelSet texels = std::move(texelResult.value());
+  const Clusters clusters = computeClusters(scene, texels);
+  runtime::TransportData data;
+  ASSERT_TRUE(computeLinks(scene, tracer, texels, clusters, {}, data).isOk());
+  DirectOptions dopt;
+  dopt.emissiveSamples = 256;
+  ASSERT_TRUE(computeDirect(scene, tracer, texels, clusters, dopt, data).isOk());
+  ASSERT_EQ(data.sources.size(), 1u);
+  const runtime::Source& lamp = data.sources[0];
+  ASSERT_EQ(lamp.kind, runtime::SourceKind::Emissive);
+
+  // The lamp's world triangles and a floor texel.
+  std::vector<glm::vec3> tri;
+  uint32_t floorInstance = ~0u;
+  for (uint32_t i = 0; i < scene.instances.size(); ++i) {
+    const scenes::Instance& inst = scene.instances[i];
+    if (inst.name == "floor") floorInstance = i;
+    if (inst.name != "light") continue;
+    for (const scenes::Primitive& p : scene.meshes[size_t(inst.mesh)].primitives)
+      for (uint32_t idx : p.indices) tri.push_back(glm::vec3(inst.transform * glm::vec4(p.positions[idx], 1.0f)));
+  }
+  ASSERT_FALSE(tri.empty());
+  ASSERT_NE(floorInstance, ~0u);
+  uint32_t best = runtime::kNoTexel;
+  float bestDist = 1e30f;
+  for (uint32_t t = 0; t < texels.size(); ++t) {
+    if (texels.instance[t] != floorInstance || !texels.valid[t]) continue;
+    // Towards the back left corner the blocks hide none of the lamp (no penumbra noise).
+    const glm::vec2 d(texels.position[t].x - 0.15f, texels.position[t].z - 0.45f);
+    if (glm::dot(d, d) < bestDist) bestDist = glm::dot(d, d), best = t;
+  }
+  ASSERT_NE(best, runtime::kNoTexel);
+  const glm::vec3 p = texels.position[best], n = texels.normal[best];
+  double expected = 0.0;
+  const int grid = 64;
+  for (size_t k = 0; k + 2 < tri.size(); k += 3) {
+    const glm::vec3 e1 = tri[k + 1] - tri[k], e2 = tri[k + 2] - tri[k];
+    const glm::vec3 nl = glm::normalize(glm::cross(e1, e2));
+    const float area = 0.5f * glm::length(glm::cross(e1, e2));
+    double sum = 0.0;
+    int count = 0;
+    for (int i = 0; i < grid; ++i)
+      for (int j = 0; j < grid; ++j) {
+        const float u = (i + 0.5f) / grid, v = (j + 0.5f) / grid;
+        if (u + v > 1.0f) continue;
+        ++count;
+        const glm::vec3 w = tri[k] + u * e1 + v * e2 - p;
+        const float r2 = glm::dot(w, w);
+        const glm::vec3 d = w / std::sqrt(r2);
+        // Visibility too, so the check does not hinge on where exactly the blocks stand.
+        Ray ray;
+        ray.origin = p;
+        ray.direction = d;
+        ray.tfar = 0.999f * std::sqrt(r2);
+        if (tracer.occluded(ray)) continue;
+        sum += std::max(0.0f, glm::dot(n, d)) * std::max(0.0f, -glm::dot(nl, d)) / r2;
+      }
+    expected += sum / count * area / kPi;
+  }
+  EXPECT_GT(expected, 0.01);
+  EXPECT_NEAR(lamp.texelTransfer[best], expected, 0.03 * expected);
+  // Through the solver: E/π = Le × transfer for direct light, plus bounced light on top.
+  runtime::Solver solver(data);
+  solver.solve();
+  std::vector<glm::vec3> out;
+  solver.gatherTexels(out);
+  const glm::vec3 le = data.materials[lamp.material].emission;
+  EXPECT_NEAR(le.x, 17.0f, 1e-4f);
+  EXPECT_GT(out[best].x, le.x * lamp.texelTransfer[best]);
+  EXPECT_LT(out[best].x, 2.0f * le.x * lamp.texelTransfer[best]);  // near the walls: ~50% bounce
+}
+
+TEST(BakerTransport, DirectionalLightStraightDownGivesIntensityOverPi) {
+  Builder b;
+  b.scene.materials.push_back(material("grey", glm::vec3(0.5f)));
+  b.addQuad({-1, 0, -1}, {0, 0, 2}, {2, 0, 0}, 4, 2, 0);
+  b.finish();
+  scenes::Light sun;
+  sun.name = "sun";
+  sun.type = scenes::LightType::Directional;
+  sun.direction = {0, -1, 0};
+  sun.intensity = 5.0f;
+  b.scene.lights.push_back(sun);
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  runtime::TransportData data;
+  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, {}, data).isOk());
+  ASSERT_TRUE(computeDirect(b.scene, *tracer, b.texels, b.clusters, {}, data).isOk());
+  ASSERT_EQ(data.sources.size(), 1u);
+  for (float v : data.sources[0].texelTransfer) EXPECT_NEAR(v, 1.0f / kPi, 1e-6f);
+  for (float v : data.sources[0].clusterTransfer) EXPECT_NEAR(v, 1.0f / kPi, 1e-6f);
+  runtime::Solver solver(data);
+  solver.solve();
+  std::vector<glm::vec3> out;
+  solver.gatherTexels(out);
+  for (const glm::vec3& v : out) EXPECT_NEAR(v.y, 5.0f / kPi, 1e-5f);
+}
+
+// A point light 1 m above a 4 m floor of 0.1 m texels, with an optional 0.4 m blocker halfway.
+struct PointLightScene {
+  Builder b;
+  std::unique_ptr<RayTracer> tracer;
+  uint32_t below = 0, edge = 0;  // the texel under the light and one on the shadow's edge
+  glm::vec3 light{2.05f, 1.0f, 2.05f};
+
+  PointLightScene(bool blocker, float radius) {
+    b.scene.materials.push_back(material("grey", glm::vec3(0.5f)));
+    b.addQuad({0, 0, 0}, {0, 0, 4}, {4, 0, 0}, 40, 10, 0);
+    if (blocker) b.addQuad({1.85f, 0.5f, 1.85f}, {0.4f, 0, 0}, {0, 0, 0.4f}, 0, 1, 0);
+    b.finish();
+    scenes::Light l;
+    l.name = "bulb";
+    l.type = scenes::LightType::Point;
+    l.position = light;
+    l.radius = radius;
+    b.scene.lights.push_back(l);
+    tracer = b.tracer();
+    // Texel (i, j) sits at z = 0.05 + 0.1 i, x = 0.05 + 0.1 j (e1 = +Z, e2 = +X).
+    below = 20 * 40 + 20;
+    edge = 24 * 40 + 20;  // x = 2.45: the blocker's shadow edge (2.05 + 2 × 0.2)
+  }
+  float unshadowed(uint32_t t) const {
+    const glm::vec3 d = light - b.texels.position[t];
+    const float dist = glm::length(d);
+    return glm::dot(glm::normalize(d), glm::vec3(0, 1, 0)) / (dist * dist) / kPi;
+  }
+};
+
+TEST(BakerTransport, PointLightInverseSquareHardShadowAndPenumbra) {
+  {
+    PointLightScene s(false, 0.0f);
+    ASSERT_TRUE(s.tracer);
+    runtime::TransportData data;
+    ASSERT_TRUE(computeDirect(s.b.scene, *s.tracer, s.b.texels, s.b.clusters, {}, data).isOk());
+    const std::vector<float>& tr = data.sources[0].texelTransfer;
+    EXPECT_NEAR(s.b.texels.position[s.below].x, 2.05f, 1e-5f);
+    EXPECT_NEAR(s.b.texels.position[s.edge].x, 2.45f, 1e-5f);
+    // I / h² / π directly below (h measured from the offset sample point).
+    const float h = 1.0f - s.b.texels.position[s.below].y;
+    EXPECT_NEAR(tr[s.below], 1.0f / (h * h) / kPi, 1e-6f);
+    for (uint32_t t = 0; t < s.b.texels.size(); t += 37)
+      EXPECT_NEAR(tr[t], s.unshadowed(t), 1e-6f) << t;
+  }
+  {
+    PointLightScene s(true, 0.0f);
+    ASSERT_TRUE(s.tracer);
+    runtime::TransportData data;
+    ASSERT_TRUE(computeDirect(s.b.scene, *s.tracer, s.b.texels, s.b.clusters, {}, data).isOk());
+    EXPECT_EQ(data.sources[0].texelTransfer[s.below], 0.0f);
+    EXPECT_NEAR(data.sources[0].texelTransfer[s.edge + 40], s.unshadowed(s.edge + 40), 1e-6f);
+  }
+  {
+    PointLightScene s(true, 0.1f);
+    ASSERT_TRUE(s.tracer);
+    DirectOptions opt;
+    opt.lightSamples = 64;
+    runtime::TransportData data;
+    ASSERT_TRUE(computeDirect(s.b.scene, *s.tracer, s.b.texels, s.b.clusters, opt, data).isOk());
+    const std::vector<float>& tr = data.sources[0].texelTransfer;
+    EXPECT_EQ(tr[s.below], 0.0f);  // umbra: the blocker hides the whole bulb
+    const float full = s.unshadowed(s.edge);
+    EXPECT_GT(tr[s.edge], 0.2f * full);
+    EXPECT_LT(tr[s.edge], 0.8f * full);
+    EXPECT_NEAR(tr[s.edge + 3 * 40], s.unshadowed(s.edge + 3 * 40), 1e-6f);  // fully lit
+  }
+}
+
+TEST(BakerTransport, SpotConeAndRangeFollowGltf) {
+  Builder b;
+  b.scene.materials.push_back(material("grey", glm::vec3(0.5f)));
+  b.addQuad({0, 0, 0}, {0, 0, 4}, {4, 0, 0}, 40, 10, 0);
+  b.finish();
+  scenes::Light spot;
+  spot.type = scenes::LightType::Spot;
+  spot.position = {2.05f, 1.0f, 2.05f};
+  spot.direction = {0, -1, 0};
+  spot.innerConeAngle = 0.2f;
+  spot.outerConeAngle = 0.6f;
+  spot.range = 3.0f;
+  b.scene.lights.push_back(spot);
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  runtime::TransportData data;
+  ASSERT_TRUE(computeDirect(b.scene, *tracer, b.texels, b.clusters, {}, data).isOk());
+  const std::vector<float>& tr = data.sources[0].texelTransfer;
+  for (uint32_t t = 0; t < b.texels.size(); ++t) {
+    const glm::vec3 d = spot.position - b.texels.position[t];
+    const float dist = glm::length(d);
+    const float angle = std::acos(std::min(1.0f, d.y / dist));
+    const float x = dist / spot.range;
+    const float window = std::pow(std::max(0.0f, 1.0f - x * x * x * x), 2.0f);
+    const float a = std::clamp((std::cos(angle) - std::cos(0.6f)) /
+                                   (std::cos(0.2f) - std::cos(0.6f)), 0.0f, 1.0f);
+    const float expected = (d.y / dist) * window * a * a / (dist * dist) / kPi;
+    ASSERT_NEAR(tr[t], expected, 1e-5f) << t;
+    if (angle > 0.61f) {
+      ASSERT_EQ(tr[t], 0.0f);
+    }
+  }
+}
+
+// Floor and wall lit by one point light: doubling the intensity doubles every solved texel,
+// bounced light included.
+TEST(BakerTransport, SolvedTexelsAreLinearInLightIntensity) {
+  Builder b;
+  b.scene.materials.push_back(material("grey", glm::vec3(0.7f)));
+  b.addQuad({0, 0, 0}, {0, 0, 2}, {2, 0, 0}, 8, 4, 0);  // floor, +Y
+  b.addQuad({0, 0, 0}, {0, 2, 0}, {0, 0, 2}, 8, 4, 0);  // wall at x = 0, +X
+  b.finish();
+  scenes::Light l;
+  l.type = scenes::LightType::Point;
+  l.position = {1.0f, 0.2f, 1.0f};
+  l.intensity = 3.0f;
+  b.scene.lights.push_back(l);
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  LinkOptions lopt;
+  lopt.texelRays = 64;
+  runtime::TransportData data;
+  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, lopt, data).isOk());
+  ASSERT_TRUE(computeDirect(b.scene, *tracer, b.texels, b.clusters, {}, data).isOk());
+  auto solve = [&]() {
+    runtime::Solver solver(data);
+    runtime::SolveOptions sopt;
+    sopt.tolerance = 1e-7f;
+    solver.solve(sopt);
+    std::vector<glm::vec3> out;
+    solver.gatherTexels(out);
+    return out;
+  };
+  const std::vector<glm::vec3> once = solve();
+  data.sources[0].intensity *= 2.0f;
+  const std::vector<glm::vec3> twice = solve();
+  float indirect = 0.0f;
+  for (uint32_t t = 0; t < data.texelCount; ++t) {
+    EXPECT_NEAR(twice[t].x, 2.0f * once[t].x, 1e-5f * std::max(1.0f, once[t].x)) << t;
+    indirect += once[t].x - 3.0f * data.sources[0].texelTransfer[t];
+  }
+  EXPECT_GT(indirect, 0.0f);  // the wall and floor light each other
+}
+
+}  // namespace
+}  // namespace afterglow::baker

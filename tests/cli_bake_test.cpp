@@ -1,0 +1,236 @@
+// `afterglow bake` and `afterglow render` run as a user would: the files a bake writes, the
+// memory budget refusal that writes nothing, settings precedence, and the rendered picture.
+#include <signal.h>
+#include <sys/wait.h>
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <thread>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "test_util.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace afterglow::test {
+namespace {
+
+struct BakeRun {
+  int exitCode = -1;
+  std::string out, err;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+BakeRun runCli(const std::string& dir, const std::string& args) {
+  const std::string out = dir + "/.stdout", err = dir + "/.stderr";
+  const std::string command =
+      std::string("'") + AFTERGLOW_CLI + "' " + args + " >'" + out + "' 2>'" + err + "'";
+  const int status = std::system(command.c_str());
+  BakeRun r;
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  fs::remove(out);
+  fs::remove(err);
+  return r;
+}
+
+// Every file under dir, relative, sorted.
+std::vector<std::string> tree(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) names.push_back(fs::relative(e.path(), dir).generic_string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// A draft bake of the Cornell box, shared by the tests below (each bake takes a second).
+const std::string& bakedCornell() {
+  static const std::string out = [] {
+    const std::string dir = tempDir("cli_bake_cornell");
+    const std::string o = dir + "/out";
+    BakeRun r = runCli(dir, "bake builtin:cornell -o '" + o +
+                            "' --quality draft --texels-per-unit 48 --quiet");
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    return o;
+  }();
+  return out;
+}
+
+TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
+  const std::string out = bakedCornell();
+  const std::vector<std::string> files = tree(out);
+  const std::vector<std::string> expected = {"lightmaps/lightmap0.exr", "lightmaps/lightmap0.png",
+                                             "report.json", "scene.bin", "scene.gltf"};
+  EXPECT_EQ(files, expected);
+
+  const json report = json::parse(slurp(out + "/report.json"));
+  const size_t texels = report.at("texels").get<size_t>();
+  EXPECT_GT(texels, 1000u);
+  EXPECT_LE(report.at("validTexels").get<size_t>(), texels);
+  EXPECT_GT(report.at("validTexels").get<size_t>(), texels * 8 / 10);
+  EXPECT_GT(report.at("clusters").get<size_t>(), 7u);  // at least one per wall, block and lamp
+  EXPECT_GT(report.at("links").at("total").get<size_t>(), 0u);
+  EXPECT_GT(report.at("raysTraced").get<uint64_t>(), texels * 32);  // draft: 32 rays per texel
+  for (const char* stage : {"load", "uv", "texels", "clusters", "links", "direct", "solve"})
+    EXPECT_TRUE(report.at("stages").contains(stage)) << stage;
+  EXPECT_GT(report.at("peakMemoryBytes").get<size_t>(), 1000000u);
+  EXPECT_TRUE(report.at("warnings").is_array());
+  EXPECT_EQ(report.at("settings").at("texelRays").get<int>(), 32);
+
+  // The EXR is linear half float at the atlas size the report gives.
+  auto in = OIIO::ImageInput::open(out + "/lightmaps/lightmap0.exr");
+  ASSERT_TRUE(in);
+  EXPECT_EQ(in->spec().format, OIIO::TypeDesc::HALF);
+  EXPECT_EQ(in->spec().nchannels, 3);
+  EXPECT_EQ(in->spec().width, report.at("atlases").at(0).at("width").get<int>());
+  EXPECT_EQ(in->spec().height, report.at("atlases").at(0).at("height").get<int>());
+
+  // Every lightmapped primitive uses a material carrying MOZ_lightmap on TEXCOORD_1, whose
+  // texture is the PNG preview.
+  const json gltf = json::parse(slurp(out + "/scene.gltf"));
+  const auto& used = gltf.at("extensionsUsed");
+  EXPECT_NE(std::find(used.begin(), used.end(), "MOZ_lightmap"), used.end());
+  EXPECT_EQ(gltf.at("buffers").at(0).at("uri"), "scene.bin");
+  size_t lightmapped = 0;
+  for (const json& node : gltf.at("nodes")) {
+    if (!node.contains("mesh")) continue;
+    for (const json& prim : gltf.at("meshes").at(node.at("mesh").get<size_t>()).at("primitives")) {
+      ASSERT_TRUE(prim.at("attributes").contains("TEXCOORD_1"));
+      const json& mat = gltf.at("materials").at(prim.at("material").get<size_t>());
+      const json& moz = mat.at("extensions").at("MOZ_lightmap");
+      EXPECT_EQ(moz.at("texCoord").get<int>(), 1);
+      const json& tex = gltf.at("textures").at(moz.at("index").get<size_t>());
+      EXPECT_EQ(gltf.at("images").at(tex.at("source").get<size_t>()).at("uri"),
+                "lightmaps/lightmap0.png");
+      ++lightmapped;
+    }
+  }
+  EXPECT_EQ(lightmapped, 8u);  // 5 walls, 2 blocks, the lamp
+}
+
+TEST(CliBake, OverTheMemoryBudgetRefusesAndWritesNothing) {
+  const std::string dir = tempDir("cli_bake_budget");
+  BakeRun r = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --memory-budget 0.000001");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("--yes"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--memory-budget"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+  EXPECT_TRUE(tree(dir).empty());
+}
+
+TEST(CliBake, SettingsFileOverridesThePresetAndTheCommandLineOverridesBoth) {
+  const std::string dir = tempDir("cli_bake_settings");
+  {
+    std::ofstream s(dir + "/settings.json");
+    s << R"({"quality": "draft", "texel-rays": 8, "cluster-rays": 16, "texels-per-unit": 16,
+            "sky": [0.1, 0.2, 0.3]})";
+  }
+  BakeRun r = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --settings '" + dir +
+                          "/settings.json' --cluster-rays 24 --quiet");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const json settings = json::parse(slurp(dir + "/out/report.json")).at("settings");
+  EXPECT_EQ(settings.at("quality"), "draft");
+  EXPECT_EQ(settings.at("texelRays").get<int>(), 8);       // file over preset (32)
+  EXPECT_EQ(settings.at("clusterRays").get<int>(), 24);    // command line over file
+  EXPECT_EQ(settings.at("lightSamples").get<int>(), 4);    // draft preset
+  EXPECT_FLOAT_EQ(settings.at("sky").at(2).get<float>(), 0.3f);
+
+  std::ofstream(dir + "/bad.json") << R"({"no-such-setting": 1})";
+  BakeRun bad = runCli(dir, "bake builtin:cornell -o '" + dir + "/out2' --settings '" + dir +
+                            "/bad.json'");
+  EXPECT_EQ(bad.exitCode, 2);
+  EXPECT_NE(bad.err.find("no-such-setting"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir + "/out2"));
+}
+
+TEST(CliBake, CtrlCExits130AndWritesNothing) {
+  const std::string dir = tempDir("cli_bake_interrupt");
+  const std::string out = dir + "/out";
+  pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    int devnull = open("/dev/null", O_WRONLY);
+    dup2(devnull, 1);
+    dup2(devnull, 2);
+    execl(AFTERGLOW_CLI, AFTERGLOW_CLI, "bake", "builtin:cornell", "-o", out.c_str(),
+          "--quality", "high", "--texels-per-unit", "256", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  // This bake takes many seconds; the signal lands in the precompute.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CliBake, HelpListsTheOptions) {
+  const std::string dir = tempDir("cli_bake_help");
+  BakeRun bake = runCli(dir, "bake --help");
+  EXPECT_EQ(bake.exitCode, 0);
+  for (const char* option : {"--quality", "--memory-budget", "--settings", "--yes", "--sky"})
+    EXPECT_NE(bake.out.find(option), std::string::npos) << option;
+  BakeRun render = runCli(dir, "help render");
+  EXPECT_EQ(render.exitCode, 0);
+  EXPECT_NE(render.out.find("Usage: afterglow render"), std::string::npos) << render.out;
+  BakeRun missing = runCli(dir, "bake builtin:cornell");
+  EXPECT_EQ(missing.exitCode, 2);
+  EXPECT_NE(missing.err.find("-o"), std::string::npos) << missing.err;
+}
+
+TEST(CliRender, WritesAPictureOfTheRequestedSize) {
+  const std::string out = bakedCornell();
+  const std::string dir = tempDir("cli_render");
+  BakeRun r = runCli(dir, "render '" + out + "/scene.gltf' --camera Camera --width 64 --height 48 "
+                          "-o '" + dir + "/view.png' --quiet");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  auto in = OIIO::ImageInput::open(dir + "/view.png");
+  ASSERT_TRUE(in);
+  ASSERT_EQ(in->spec().width, 64);
+  ASSERT_EQ(in->spec().height, 48);
+  std::vector<uint8_t> px(64 * 48 * size_t(in->spec().nchannels));
+  ASSERT_TRUE(in->read_image(0, 0, 0, -1, OIIO::TypeDesc::UINT8, px.data()));
+  // The back wall at the centre is lit; the red wall is on the left of the view, green right.
+  const int c = in->spec().nchannels;
+  auto at = [&](int x, int y, int k) { return int(px[(size_t(y) * 64 + size_t(x)) * size_t(c) + size_t(k)]); };
+  EXPECT_GT(at(32, 24, 0), 40);
+  EXPECT_GT(at(12, 24, 0), at(12, 24, 1) + 20);   // red wall
+  EXPECT_GT(at(52, 24, 1), at(52, 24, 0) + 20); // green wall
+
+  BakeRun noCamera = runCli(dir, "render '" + out + "/scene.gltf' --camera Nope -o '" + dir +
+                                 "/none.png'");
+  EXPECT_EQ(noCamera.exitCode, 1);
+  EXPECT_NE(noCamera.err.find("Camera"), std::string::npos) << noCamera.err;
+  EXPECT_FALSE(fs::exists(dir + "/none.png"));
+
+  BakeRun lookAt = runCli(dir, "render '" + out + "/scene.gltf' --look-from 0.278,0.273,-0.8 "
+                               "--look-at 0.278,0.273,0 --fov 40 --width 32 --height 32 -o '" +
+                               dir + "/look.png' --quiet");
+  EXPECT_EQ(lookAt.exitCode, 0) << lookAt.err;
+  EXPECT_TRUE(fs::exists(dir + "/look.png"));
+}
+
+}  // namespace
+}  // namespace afterglow::test
