@@ -401,7 +401,7 @@ TEST(BakerClusters, FurnaceBoxHasFourClustersPerFace) {
 
   ClusterOptions options;
   options.clusterSize = 0.5f;
-  const Clusters clusters = computeClusters(scene, texels, options);
+  const Clusters clusters = computeClusters(scene, nullptr, texels, {}, {}, options);
   expectClusterInvariants(scene, texels, clusters, options);
   EXPECT_EQ(clusters.size(), 24u);
   for (uint32_t c = 0; c < clusters.size(); ++c) {
@@ -425,7 +425,7 @@ TEST(BakerClusters, CornellInvariants) {
   ClusterOptions options;
   options.clusterSize = 0.1f;
   options.maxNormalAngleDeg = 20.0f;
-  const Clusters clusters = computeClusters(c.scene, c.texels, options);
+  const Clusters clusters = computeClusters(c.scene, nullptr, c.texels, {}, {}, options);
   expectClusterInvariants(c.scene, c.texels, clusters, options);
   // Five 0.55 m walls in 0.1 m cells, blocks and the light: well over 100 clusters.
   EXPECT_GT(clusters.size(), 100u);
@@ -433,17 +433,18 @@ TEST(BakerClusters, CornellInvariants) {
   std::printf("cornell clusters at 0.1 m: %u (%zu with fewer than 4 texels)\n", clusters.size(),
               tinyClusters(clusters));
 
-  // Cells of two texels across: edges leave clusters of one or two texels, which merge into
-  // neighbours when their normals agree.
+  // Clusters of two texels across: without a minimum the subdivision leaves many of one to
+  // three texels; with minTexels = 4 a node is split only into halves of at least 4, and what
+  // stays small comes from normal cones (a block's edge), so far fewer are tiny.
   options.clusterSize = 2.0f / 64.0f;
   options.minTexels = 1;
-  const Clusters unmerged = computeClusters(c.scene, c.texels, options);
+  const Clusters unmerged = computeClusters(c.scene, nullptr, c.texels, {}, {}, options);
   expectClusterInvariants(c.scene, c.texels, unmerged, options);
   options.minTexels = 4;
-  const Clusters merged = computeClusters(c.scene, c.texels, options);
+  const Clusters merged = computeClusters(c.scene, nullptr, c.texels, {}, {}, options);
   expectClusterInvariants(c.scene, c.texels, merged, options);
   EXPECT_GT(tinyClusters(unmerged), 0u);
-  EXPECT_LT(tinyClusters(merged), tinyClusters(unmerged) / 4);
+  EXPECT_LT(tinyClusters(merged), tinyClusters(unmerged) / 3);
   EXPECT_LT(merged.size(), unmerged.size());
   std::printf("cornell clusters at 2 texels: %u (%zu tiny) unmerged, %u (%zu tiny) merged\n",
               unmerged.size(), tinyClusters(unmerged), merged.size(), tinyClusters(merged));
@@ -502,10 +503,10 @@ TEST(BakerTexels, DeterministicAcrossThreadCounts) {
   ASSERT_TRUE(tracer);
   setThreadCount(1);
   const TexelSet a = texelsOrDie(scene, *tracer);
-  const Clusters ca = computeClusters(scene, a);
+  const Clusters ca = computeClusters(scene, tracer.get(), a);
   setThreadCount(2);
   const TexelSet b = texelsOrDie(scene, *tracer);
-  const Clusters cb = computeClusters(scene, b);
+  const Clusters cb = computeClusters(scene, tracer.get(), b);
   setThreadCount(0);
   ASSERT_EQ(a.size(), b.size());
   for (uint32_t t = 0; t < a.size(); ++t) {
@@ -533,7 +534,7 @@ TEST(BakerTexels, SponzaAreasAndValidity) {
   const TexelSet texels = texelsOrDie(scene, *tracer);
   const double texelSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const Clusters clusters = computeClusters(scene, texels);
+  const Clusters clusters = computeClusters(scene, tracer.get(), texels);
   const double clusterSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() - texelSeconds;
 
@@ -568,7 +569,11 @@ TEST(BakerTexels, SponzaAreasAndValidity) {
   }
   EXPECT_NEAR(texelArea, worldArea, 0.01 * worldArea);
   EXPECT_GT(valid, texels.size() * 7 / 10);
-  size_t members = clusters.memberTexels.size();
+  // Every valid texel sits in exactly one front-side cluster (the back sides of Sponza's
+  // double-sided plants and chains have clusters of their own on top).
+  size_t members = 0;
+  for (uint32_t c = 0; c < clusters.size(); ++c)
+    if (!clusters.back[c]) members += clusters.firstTexel[c + 1] - clusters.firstTexel[c];
   EXPECT_EQ(members, valid);
   std::printf("sponza at 4 texels/m: %u texels (%zu valid), area %.1f of %.1f m², texels %.2f s, "
               "%u clusters (%zu under 4 texels) %.2f s\n",

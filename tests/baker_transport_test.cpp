@@ -83,6 +83,8 @@ struct Builder {
           texels.uv0.push_back({s, u});
           texels.atlas.push_back(uint16_t(inst.lightmap.atlas));
           texels.pixel.push_back({uint16_t(i), uint16_t(j)});
+          texels.offset.push_back(1e-4f);
+          texels.nearGeometry.push_back(0);
           texels.valid.push_back(1);
           auto key = std::make_pair(i / block, j / block);
           auto it = groupOfBlock.find(key);
@@ -102,6 +104,7 @@ struct Builder {
   void finish() {
     clusters = Clusters();
     clusters.texelCluster.assign(texels.size(), runtime::kNoTexel);
+    clusters.texelBackCluster.assign(texels.size(), runtime::kNoTexel);
     clusters.firstTexel.push_back(0);
     for (uint32_t c = 0; c < groups.size(); ++c) {
       float area = 0.0f;
@@ -124,6 +127,7 @@ struct Builder {
       const scenes::Material& m = scene.material(mat);
       clusters.albedo.push_back(glm::vec3(m.baseColorFactor));
       clusters.emission.push_back(m.emission());
+      clusters.back.push_back(0);
     }
   }
 
@@ -133,6 +137,16 @@ struct Builder {
     return result.isOk() ? std::move(result.value()) : nullptr;
   }
 };
+
+// The texels' gather, then the links from it (what bake() does between them, clustering, is
+// done by hand in these tests).
+Status gatherAndLink(const Scene& scene, const RayTracer& tracer, TexelSet& texels,
+                     const Clusters& clusters, const LinkOptions& options,
+                     runtime::TransportData& data) {
+  Result<TexelGather> gather = gatherTexels(scene, tracer, texels, options);
+  if (!gather) return gather.status();
+  return computeLinks(scene, tracer, texels, gather.value(), clusters, options, data);
+}
 
 float rowSum(const runtime::SparseLinks& links, size_t row) {
   float sum = 0.0f;
@@ -162,7 +176,7 @@ TEST(BakerTransport, ParallelSquaresFormFactorsRowsAndReciprocity) {
   opt.texelRays = 1024;
   opt.clusterRays = 16384;
   runtime::TransportData data;
-  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
   ASSERT_EQ(data.texelCount, b.texels.size());
   ASSERT_EQ(data.clusterCount, 8u);
   ASSERT_EQ(data.texelLinks.rows(), size_t(2 * n * n));
@@ -231,11 +245,11 @@ TEST(BakerTransport, LinksAndDirectAreIndependentOfThreadCount) {
   const int saved = threadCount();
   setThreadCount(1);
   TexelSet texels1 = b.texels;
-  ASSERT_TRUE(computeLinks(b.scene, *tracer, texels1, b.clusters, opt, one).isOk());
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, texels1, b.clusters, opt, one).isOk());
   ASSERT_TRUE(computeDirect(b.scene, *tracer, texels1, b.clusters, {}, one).isOk());
   setThreadCount(2);
   TexelSet texels2 = b.texels;
-  ASSERT_TRUE(computeLinks(b.scene, *tracer, texels2, b.clusters, opt, two).isOk());
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, texels2, b.clusters, opt, two).isOk());
   ASSERT_TRUE(computeDirect(b.scene, *tracer, texels2, b.clusters, {}, two).isOk());
   setThreadCount(saved);
   ASSERT_EQ(one.sources.size(), 2u);  // the point light, then the lamp material
@@ -264,7 +278,7 @@ TEST(BakerTransport, OpenFloorSeesTheSkyAsSh) {
   LinkOptions opt;
   opt.texelRays = 4096;
   runtime::TransportData data;
-  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
   EXPECT_EQ(data.texelLinks.size(), 0u);
   for (uint32_t t = 0; t < 4; ++t) {
     const float* sh = &data.texelSky[size_t(t) * runtime::kShCount];
@@ -298,7 +312,7 @@ TEST(BakerTransport, BackFacesOfSingleSidedGeometryInvalidateTexels) {
   LinkOptions opt;
   opt.texelRays = 256;
   runtime::TransportData data;
-  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, b.texels, b.clusters, opt, data).isOk());
   int invalid = 0;
   for (uint32_t t = 0; t < b.texels.size(); ++t) {
     const bool covered = b.texels.position[t].x < 0.5f;
@@ -334,7 +348,7 @@ TEST(BakerTransport, WhiteFurnaceConvergesToAnalyticRadiance) {
   DirectOptions dopt;
   dopt.emissiveSamples = 4096;
   runtime::TransportData data;
-  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, lopt, data).isOk());
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, b.texels, b.clusters, lopt, data).isOk());
   ASSERT_TRUE(computeDirect(b.scene, *tracer, b.texels, b.clusters, dopt, data).isOk());
   ASSERT_EQ(data.sources.size(), 1u);
   EXPECT_EQ(data.sources[0].kind, runtime::SourceKind::Emissive);
@@ -383,7 +397,7 @@ TEST(BakerTransport, WhiteFurnaceThroughTexelsAndClusters) {
   Result<TexelSet> texelResult = computeTexels(scene, tracer);
   ASSERT_TRUE(texelResult.isOk()) << texelResult.message();
   TexelSet texels = std::move(texelResult.value());
-  const Clusters clusters = computeClusters(scene, texels);
+  const Clusters clusters = computeClusters(scene, &tracer, texels);
   ASSERT_GT(texels.size(), 1000u);
   LinkOptions lopt;
   lopt.texelRays = 256;
@@ -391,7 +405,7 @@ TEST(BakerTransport, WhiteFurnaceThroughTexelsAndClusters) {
   DirectOptions dopt;
   dopt.emissiveSamples = 2048;
   runtime::TransportData data;
-  ASSERT_TRUE(computeLinks(scene, tracer, texels, clusters, lopt, data).isOk());
+  ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, lopt, data).isOk());
   ASSERT_TRUE(computeDirect(scene, tracer, texels, clusters, dopt, data).isOk());
   ASSERT_EQ(data.materials.size(), 1u);
   EXPECT_NEAR(data.materials[0].albedo.x, 0.5f, 1e-6f);
@@ -431,9 +445,9 @@ TEST(BakerTransport, CornellLampOnTheFloorMatchesQuadrature) {
   Result<TexelSet> texelResult = computeTexels(scene, tracer);
   ASSERT_TRUE(texelResult.isOk()) << texelResult.message();
   TexelSet texels = std::move(texelResult.value());
-  const Clusters clusters = computeClusters(scene, texels);
+  const Clusters clusters = computeClusters(scene, &tracer, texels);
   runtime::TransportData data;
-  ASSERT_TRUE(computeLinks(scene, tracer, texels, clusters, {}, data).isOk());
+  ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, {}, data).isOk());
   DirectOptions dopt;
   dopt.emissiveSamples = 256;
   ASSERT_TRUE(computeDirect(scene, tracer, texels, clusters, dopt, data).isOk());
@@ -516,7 +530,7 @@ TEST(BakerTransport, DirectionalLightStraightDownGivesIntensityOverPi) {
   auto tracer = b.tracer();
   ASSERT_TRUE(tracer);
   runtime::TransportData data;
-  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, {}, data).isOk());
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, b.texels, b.clusters, {}, data).isOk());
   ASSERT_TRUE(computeDirect(b.scene, *tracer, b.texels, b.clusters, {}, data).isOk());
   ASSERT_EQ(data.sources.size(), 1u);
   for (float v : data.sources[0].texelTransfer) EXPECT_NEAR(v, 1.0f / kPi, 1e-6f);
@@ -649,7 +663,7 @@ TEST(BakerTransport, SolvedTexelsAreLinearInLightIntensity) {
   LinkOptions lopt;
   lopt.texelRays = 64;
   runtime::TransportData data;
-  ASSERT_TRUE(computeLinks(b.scene, *tracer, b.texels, b.clusters, lopt, data).isOk());
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, b.texels, b.clusters, lopt, data).isOk());
   ASSERT_TRUE(computeDirect(b.scene, *tracer, b.texels, b.clusters, {}, data).isOk());
   auto solve = [&]() {
     runtime::Solver solver(data);

@@ -183,25 +183,44 @@ TEST(Cli, CtrlCExits130AndWritesNothing) {
   AG_REQUIRE_SHARED_SCENE(sponza, "sponza/Sponza.gltf");
   std::string dir = tempDir("cli_interrupt");
   const std::string out = dir + "/sponza.gltf";
+  int pipeFds[2];
+  ASSERT_EQ(pipe(pipeFds), 0);
   pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
     int devnull = open("/dev/null", O_WRONLY);
     dup2(devnull, 1);
-    dup2(devnull, 2);
+    dup2(pipeFds[1], 2);  // progress lines: one per stage as it ends
+    close(pipeFds[0]);
     execl(AFTERGLOW_CLI, AFTERGLOW_CLI, "uv", sponza.c_str(), "-o", out.c_str(), "--threads", "2",
           "--texels-per-unit", "32", static_cast<char*>(nullptr));
     _exit(127);
   }
-  // Unwrapping Sponza at 32 texels per metre takes seconds; interrupt it while it computes
-  // charts (the signal handler is in place a few milliseconds after start).
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  close(pipeFds[1]);
+  // Interrupt once the charts are done, while it packs Sponza at 32 texels per metre (which
+  // takes many seconds, so the signal always lands inside the packing).
+  std::string seen;
+  char buffer[256];
+  while (seen.find("charts") == std::string::npos) {
+    const ssize_t got = read(pipeFds[0], buffer, sizeof(buffer));
+    if (got <= 0) break;
+    seen.append(buffer, size_t(got));
+  }
+  ASSERT_NE(seen.find("charts"), std::string::npos) << seen;
+  const auto start = std::chrono::steady_clock::now();
   kill(pid, SIGINT);
+  // Keep reading until the child closes stderr, or its last words would meet a closed pipe.
+  while (read(pipeFds[0], buffer, sizeof(buffer)) > 0) {
+  }
+  close(pipeFds[0]);
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_TRUE(filesIn(dir).empty());
+  EXPECT_LT(seconds, 2.0) << "the packing did not stop promptly";
 }
 
 TEST(Cli, InfoDescribesTheBuiltinCornellBox) {

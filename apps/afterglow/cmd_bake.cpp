@@ -54,6 +54,9 @@ const char kBakeHelp[] =
     "  --sky-image FILE         equirectangular HDR sky (overrides --sky)\n"
     "  --cluster-size M         cluster edge length in metres (default 0.5)\n"
     "  --dilation N             texels each chart is grown into its padding (default 2)\n"
+    "  --reference              compute every texel with the reference path tracer instead\n"
+    "                           (slow; for validating bakes: same outputs, no clusters)\n"
+    "  --spp N                  paths per texel for --reference (default 1024)\n"
     "  --threads N              worker threads (default: every core)\n"
     "  --settings FILE.json     settings as a JSON object with the option names above as keys,\n"
     "                           e.g. {\"quality\": \"high\", \"sky\": [0.2, 0.3, 0.5]}\n"
@@ -76,6 +79,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"indirect-intensity"}, {"albedo-boost"},    {"sky"},
     {"sky-image"},         {"cluster-size"},    {"dilation"},
     {"threads"},           {"settings"},        {"memory-budget"},
+    {"reference", 0, false}, {"spp"},
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
 
 bool parseVec3(const std::string& text, glm::vec3* out) {
@@ -119,7 +123,7 @@ bool settingsArguments(const std::string& path, std::vector<std::string>* out,
     const nlohmann::json& v = it.value();
     std::string value;
     if (v.is_boolean()) {
-      if (key != "yes" && key != "quiet") {
+      if (key != "yes" && key != "quiet" && key != "reference") {
         *error = path + ": '" + key + "' is not a flag";
         return false;
       }
@@ -233,9 +237,11 @@ int runBake(int argc, char** argv, int first) {
       !args.getFloat("cluster-size", 0.5f, 0.0f, 1e6f, &options.clusters.clusterSize) ||
       !args.getInt("dilation", 2, 0, 64, &options.dilation) ||
       !args.getInt("threads", 0, 0, 1024, &threads) ||
+      !args.getInt("spp", 1024, 1, 1 << 24, &options.referenceOptions.samples) ||
       !args.getFloat("memory-budget", 8.0f, 0.0f, 1e6f, &budgetGb))
     return usage(args.error());
   options.solve.maxBounces = bounces;
+  options.reference = args.has("reference");
   if (args.has("sky") && !parseVec3(args.get("sky"), &options.skyColor))
     return usage("--sky wants r,g,b, got '" + args.get("sky") + "'");
   options.skyImage = args.get("sky-image");
@@ -318,6 +324,8 @@ int runBake(int argc, char** argv, int first) {
                              {"clusterSize", options.clusters.clusterSize},
                              {"dilation", options.dilation},
                              {"threads", threadCount()},
+                             {"reference", options.reference},
+                             {"referenceSpp", options.referenceOptions.samples},
                              {"memoryBudgetGb", budgetGb},
                              {"estimatedMemoryGb", estimateGb}};
   info.settingsJson = settings.dump();

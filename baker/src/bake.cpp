@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/reference.h"
 #include "lightmap_post.h"
 #include "sky_image.h"
 
@@ -17,73 +18,6 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
-// The factor-only diffuse albedo of a material (DESIGN.md: baseColor × (1 − metallic) plus Unity's
-// meta-pass specular share), which the runtime's setAlbedo replaces; the texture's share of each
-// cluster goes to clusterAlbedoTexture.
-glm::vec3 factorAlbedo(const scenes::Material& m) {
-  const glm::vec3 base(m.baseColorFactor);
-  const float metallic = std::clamp(m.metallicFactor, 0.0f, 1.0f);
-  const glm::vec3 spec = glm::mix(glm::vec3(0.04f), base, metallic);
-  const float roughness = std::clamp(m.roughnessFactor, 0.0f, 1.0f);
-  return base * (1.0f - metallic) + spec * roughness * roughness * 0.5f;
-}
-
-// Fills what the precompute stages leave to the bake: counts, layout, materials and the
-// per-cluster material data. Only fields a stage left empty are filled, so what computeLinks
-// wrote wins.
-void fillTransportLayout(const scenes::Scene& scene, const TexelSet& texels,
-                         const Clusters& clusters, runtime::TransportData& tr) {
-  tr.texelCount = texels.size();
-  tr.clusterCount = clusters.size();
-  if (tr.atlases.empty()) tr.atlases = texels.atlases;
-  if (tr.materials.empty()) {
-    // Material index -1 (glTF's default) has no entry; clusters then carry index 0 of a
-    // one-element list holding the default.
-    const size_t count = std::max<size_t>(scene.materials.size(), 1);
-    for (size_t m = 0; m < count; ++m) {
-      const scenes::Material& mat = scene.material(m < scene.materials.size() ? int(m) : -1);
-      runtime::MaterialParams p;
-      p.name = mat.name;
-      p.albedo = factorAlbedo(mat);
-      p.emission = mat.emission();
-      tr.materials.push_back(p);
-    }
-  }
-  const uint32_t nc = clusters.size();
-  if (tr.clusterMaterial.empty()) {
-    tr.clusterMaterial.resize(nc);
-    for (uint32_t c = 0; c < nc; ++c)
-      tr.clusterMaterial[c] = std::min<uint32_t>(clusters.material[c], uint32_t(tr.materials.size() - 1));
-  }
-  if (tr.clusterAlbedoTexture.empty()) {
-    tr.clusterAlbedoTexture.resize(nc);
-    for (uint32_t c = 0; c < nc; ++c) {
-      runtime::MaterialParams& mp = tr.materials[tr.clusterMaterial[c]];
-      glm::vec3 ratio(1.0f);
-      for (int k = 0; k < 3; ++k) {
-        if (mp.albedo[k] > 1e-6f) {
-          ratio[k] = clusters.albedo[c][k] / mp.albedo[k];
-        } else if (clusters.albedo[c][k] > 0.0f) {
-          // A factor of zero cannot be modulated; keep the cluster's albedo exact instead.
-          mp.albedo[k] = 1.0f;
-          ratio[k] = clusters.albedo[c][k];
-        }
-      }
-      tr.clusterAlbedoTexture[c] = ratio;
-    }
-  }
-  if (tr.clusterEmissionTexture.empty()) {
-    tr.clusterEmissionTexture.resize(nc);
-    for (uint32_t c = 0; c < nc; ++c) {
-      const glm::vec3 e = tr.materials[tr.clusterMaterial[c]].emission;
-      glm::vec3 ratio(1.0f);
-      for (int k = 0; k < 3; ++k)
-        if (e[k] > 1e-12f) ratio[k] = clusters.emission[c][k] / e[k];
-      tr.clusterEmissionTexture[c] = ratio;
-    }
-  }
 }
 
 // The authored light settings the solve uses: light sources follow Scene::lights in order
@@ -109,12 +43,78 @@ void applyLightSettings(const scenes::Scene& scene, runtime::TransportData& tr) 
       }
 }
 
+// Stages 2 to 5: clusters, form factors, direct light, then one solve with the authored lights.
+Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
+                          const BakeOptions& options, const glm::vec3 sky[runtime::kShCount],
+                          BakeResult& result, Progress& progress) {
+  runtime::TransportData& tr = result.transport;
+  auto cancelled = [&]() { return progress.cancelled(); };
+  auto record = [&](const char* name, Clock::time_point t0) {
+    result.stages.push_back({name, secondsSince(t0)});
+  };
+  auto t0 = Clock::now();
+  Result<TexelGather> gather = gatherTexels(scene, tracer, result.texels, options.links, progress);
+  if (cancelled()) return Status::error("cancelled");
+  if (!gather) return gather.status();
+  record("gather", t0);
+
+  t0 = Clock::now();
+  progress.begin("clusters", 1);
+  result.clusters =
+      computeClusters(scene, &tracer, result.texels, gather->harmonicDistance,
+                      gather->backHarmonicDistance, options.clusters);
+  progress.advance();
+  progress.end();
+  record("clusters", t0);
+  if (cancelled()) return Status::error("cancelled");
+
+  t0 = Clock::now();
+  Status st = computeLinks(scene, tracer, result.texels, gather.value(), result.clusters,
+                           options.links, tr, progress);
+  if (cancelled()) return Status::error("cancelled");
+  if (!st) return st;
+  record("links", t0);
+  gather = TexelGather();  // the hit codes are the bake's largest buffer
+
+  t0 = Clock::now();
+  st = computeDirect(scene, tracer, result.texels, result.clusters, options.direct, tr, progress);
+  if (cancelled()) return Status::error("cancelled");
+  if (!st) return st;
+  record("direct", t0);
+  result.raysTraced = tracer.raysTraced();
+
+  applyLightSettings(scene, tr);
+  tr.indirectIntensity = options.indirectIntensity;
+  tr.albedoBoost = options.albedoBoost;
+  std::copy(sky, sky + runtime::kShCount, tr.skySh);
+  // The solver indexes these without checks; a stage that filled them inconsistently is a bug
+  // to report, not a crash.
+  if (tr.clusterMaterial.size() != tr.clusterCount ||
+      tr.clusterAlbedoTexture.size() != tr.clusterCount ||
+      tr.texelLinks.rows() != tr.texelCount || tr.clusterLinks.rows() != tr.clusterCount)
+    return Status::error(format("internal error: inconsistent transport (%u texels, %u clusters, "
+                                "%zu texel link rows, %zu cluster link rows)",
+                                tr.texelCount, tr.clusterCount, tr.texelLinks.rows(),
+                                tr.clusterLinks.rows()));
+
+  t0 = Clock::now();
+  progress.begin("solve", 1);
+  {
+    runtime::Solver solver(tr);
+    solver.solve(options.solve);
+    solver.gatherTexels(result.texelDirect, result.texelIndirect);
+  }
+  progress.advance();
+  progress.end();
+  record("solve", t0);
+  return Status::ok();
+}
+
 }  // namespace
 
 Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
                         Progress& progress) {
   BakeResult result;
-  runtime::TransportData& tr = result.transport;
   auto cancelled = [&]() { return progress.cancelled(); };
   auto record = [&](const char* name, Clock::time_point t0) {
     result.stages.push_back({name, secondsSince(t0)});
@@ -155,55 +155,29 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
   if (result.texels.size() == 0)
     return Status::error("nothing to bake: no static instance has lightmap texels (run uv first)");
 
-  t0 = Clock::now();
-  progress.begin("clusters", 1);
-  result.clusters = computeClusters(scene, result.texels, options.clusters);
-  progress.advance();
-  progress.end();
-  record("clusters", t0);
-  if (cancelled()) return Status::error("cancelled");
-
-  t0 = Clock::now();
-  Status st = computeLinks(scene, tracer, result.texels, result.clusters, options.links, tr,
-                           progress);
-  if (cancelled()) return Status::error("cancelled");
-  if (!st) return st;
-  record("links", t0);
-
-  t0 = Clock::now();
-  st = computeDirect(scene, tracer, result.texels, result.clusters, options.direct, tr, progress);
-  if (cancelled()) return Status::error("cancelled");
-  if (!st) return st;
-  record("direct", t0);
-  result.raysTraced = tracer.raysTraced();
-
-  fillTransportLayout(scene, result.texels, result.clusters, tr);
-  applyLightSettings(scene, tr);
-  // Bake-level settings last: the stages may have reset them to their defaults.
-  tr.indirectIntensity = options.indirectIntensity;
-  tr.albedoBoost = options.albedoBoost;
-  std::copy(sky, sky + runtime::kShCount, tr.skySh);
-  // The solver indexes these without checks; a stage that filled them inconsistently is a bug
-  // to report, not a crash.
-  if (tr.clusterMaterial.size() != tr.clusterCount ||
-      tr.clusterAlbedoTexture.size() != tr.clusterCount ||
-      tr.texelLinks.rows() != tr.texelCount || tr.clusterLinks.rows() != tr.clusterCount)
-    return Status::error(format("internal error: inconsistent transport (%u texels, %u clusters, "
-                                "%zu texel link rows, %zu cluster link rows)",
-                                tr.texelCount, tr.clusterCount, tr.texelLinks.rows(),
-                                tr.clusterLinks.rows()));
-
-  t0 = Clock::now();
-  progress.begin("solve", 1);
-  std::vector<glm::vec3> values;
-  {
-    runtime::Solver solver(tr);
-    solver.solve(options.solve);
-    solver.gatherTexels(values);
+  if (options.reference) {
+    // Brute force over the same texels, for validation: no clusters, links or transport.
+    t0 = Clock::now();
+    Environment env;
+    std::copy(sky, sky + runtime::kShCount, env.skySh);
+    env.indirectIntensity = options.indirectIntensity;
+    env.albedoBoost = options.albedoBoost;
+    Result<ReferenceTexels> ref =
+        referenceTexels(scene, tracer, result.texels, env, options.referenceOptions, {}, progress);
+    if (cancelled()) return Status::error("cancelled");
+    if (!ref) return ref.status();
+    result.texelDirect.assign(result.texels.size(), glm::vec3(0.0f));
+    result.texelIndirect.assign(result.texels.size(), glm::vec3(0.0f));
+    for (size_t i = 0; i < ref->texels.size(); ++i) {
+      result.texelDirect[ref->texels[i]] = ref->direct[i];
+      result.texelIndirect[ref->texels[i]] = ref->indirect[i];
+    }
+    record("reference", t0);
+    result.raysTraced = tracer.raysTraced();
+  } else {
+    Status st = precomputeAndSolve(scene, tracer, options, sky, result, progress);
+    if (!st) return st;
   }
-  progress.advance();
-  progress.end();
-  record("solve", t0);
   if (cancelled()) return Status::error("cancelled");
 
   t0 = Clock::now();
@@ -216,8 +190,8 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
     std::vector<uint8_t> state(pixels, kPixelEmpty);
     for (size_t p = 0; p < pixels && p < layout.texelOfPixel.size(); ++p) {
       const uint32_t t = layout.texelOfPixel[p];
-      if (t == runtime::kNoTexel || t >= values.size()) continue;
-      image[p] = values[t];
+      if (t == runtime::kNoTexel || t >= result.texelDirect.size()) continue;
+      image[p] = result.texelDirect[t] + result.texelIndirect[t];
       state[p] = ts.valid.empty() || ts.valid[t] ? kPixelValid : kPixelInvalid;
     }
     fillInvalidPixels(layout.width, layout.height, image, state);

@@ -2,6 +2,8 @@
 // cells centred on the group, then by normal cones.
 #include "afterglow/baker/clusters.h"
 
+#include "afterglow/baker/raytracer.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -23,34 +25,6 @@ glm::vec3 textureRgb(const scenes::Scene& scene, const scenes::TextureRef& ref, 
   return glm::vec3(texture.sample(ref.transform(uv0)));
 }
 
-uint32_t texelMaterial(const scenes::Scene& scene, const TexelSet& texels, uint32_t t) {
-  const scenes::Instance& inst = scene.instances[texels.instance[t]];
-  return uint32_t(scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]].material);
-}
-
-// A cluster while the group is being partitioned.
-struct Provisional {
-  uint64_t cell = 0;
-  std::vector<uint32_t> members;
-  glm::dvec3 normalSum{0.0};  // area-weighted
-  glm::dvec3 plainSum{0.0};   // for clusters of zero area
-  bool alive = true;
-
-  void add(const TexelSet& texels, uint32_t t) {
-    members.push_back(t);
-    normalSum += double(texels.area[t]) * glm::dvec3(texels.normal[t]);
-    plainSum += glm::dvec3(texels.normal[t]);
-  }
-  void merge(const Provisional& other) {
-    members.insert(members.end(), other.members.begin(), other.members.end());
-    normalSum += other.normalSum;
-    plainSum += other.plainSum;
-  }
-  glm::vec3 normal() const {
-    const glm::dvec3 n = glm::length(normalSum) > 0.0 ? normalSum : plainSum;
-    return glm::length(n) > 0.0 ? glm::vec3(glm::normalize(n)) : glm::vec3(0.0f);
-  }
-};
 
 }  // namespace
 
@@ -73,11 +47,220 @@ glm::vec3 emittedRadiance(const scenes::Scene& scene, int material, glm::vec2 uv
   return m.emission() * textureRgb(scene, m.emissiveTexture, uv0);
 }
 
-Clusters computeClusters(const scenes::Scene& scene, const TexelSet& texels,
+namespace {
+
+// Splits one group's texels (one instance and material) into clusters: a k-d subdivision until
+// every node is small enough (clusterSize, adaptiveScale × median ray distance) and uniform
+// enough in ray distance, then normal cones within each leaf.
+class GroupClusterer {
+ public:
+  GroupClusterer(const TexelSet& texels, const RayTracer* tracer, bool backs,
+                 const std::vector<float>& distance, const ClusterOptions& options)
+      : texels_(texels), tracer_(tracer), backs_(backs), distance_(distance), options_(options) {
+    const float angle = glm::clamp(options.maxNormalAngleDeg, 0.0f, 180.0f) * kPi / 180.0f;
+    // Every texel within half the cone of its seed keeps the whole cluster within the cone of
+    // the cluster's mean normal (the mean of unit vectors in a cone stays in that cone).
+    seedCos_ = std::cos(0.5f * angle);
+  }
+
+  // Appends the clusters of `group` (texel indices, ascending) to `out`, each sorted.
+  void run(std::vector<uint32_t> group, std::vector<std::vector<uint32_t>>& out) {
+    std::vector<std::vector<uint32_t>> stack;
+    stack.push_back(std::move(group));
+    std::vector<std::vector<uint32_t>> leaves;
+    while (!stack.empty()) {
+      std::vector<uint32_t> node = std::move(stack.back());
+      stack.pop_back();
+      std::vector<uint32_t> a, b;
+      if (split(node, a, b)) {
+        // Second half first on the stack so the first half is finished first: the order of
+        // the clusters follows the subdivision, whatever the thread count.
+        stack.push_back(std::move(b));
+        stack.push_back(std::move(a));
+      } else {
+        leaves.push_back(std::move(node));
+      }
+    }
+    // Leaves split further where a wall stands between their texels, then by normal cones.
+    for (size_t i = 0; i < leaves.size(); ++i) {
+      std::vector<uint32_t> hidden = separateHidden(leaves[i]);
+      cones(leaves[i], out);
+      if (!hidden.empty()) leaves.push_back(std::move(hidden));
+    }
+  }
+
+ private:
+  glm::vec3 positionOf(uint32_t t) const {
+    return backs_ ? texels_.backPosition(t) : texels_.position[t];
+  }
+  glm::vec3 normalOf(uint32_t t) const { return backs_ ? -texels_.normal[t] : texels_.normal[t]; }
+
+  // Moves the texels that cannot see the leaf's central texel out of the leaf and returns them
+  // (a floor cluster must not reach under a box or past a wall: its light would leak). The
+  // test ray runs above the surface, lifted by a quarter of its length, so curved surfaces
+  // within the normal cone do not hide their own texels.
+  std::vector<uint32_t> separateHidden(std::vector<uint32_t>& leaf) const {
+    std::vector<uint32_t> hidden;
+    if (!tracer_ || leaf.size() < 2) return hidden;
+    glm::dvec3 centre(0.0);
+    for (uint32_t t : leaf) centre += glm::dvec3(positionOf(t));
+    centre /= double(leaf.size());
+    uint32_t seed = leaf.front();
+    double best = std::numeric_limits<double>::infinity();
+    for (uint32_t t : leaf) {
+      const double d = glm::length(glm::dvec3(positionOf(t)) - centre);
+      if (d < best) best = d, seed = t;
+    }
+    std::vector<uint32_t> kept;
+    for (uint32_t t : leaf) {
+      if (t == seed || sees(seed, t)) kept.push_back(t);
+      else hidden.push_back(t);
+    }
+    leaf.swap(kept);
+    return hidden;
+  }
+
+  bool sees(uint32_t a, uint32_t b) const {
+    const float lift = 0.25f * glm::length(positionOf(b) - positionOf(a));
+    const glm::vec3 from = positionOf(a) + normalOf(a) * lift;
+    const glm::vec3 to = positionOf(b) + normalOf(b) * lift;
+    const glm::vec3 d = to - from;
+    const float length = glm::length(d);
+    if (!(length > 0.0f)) return true;
+    Ray ray;
+    ray.origin = from;
+    ray.direction = d / length;
+    ray.tfar = length;
+    return !tracer_->occluded(ray);
+  }
+
+  float distanceOf(uint32_t t) const {
+    if (distance_.empty()) return std::numeric_limits<float>::infinity();
+    return distance_[t];
+  }
+
+  bool split(const std::vector<uint32_t>& node, std::vector<uint32_t>& a,
+             std::vector<uint32_t>& b) const {
+    const size_t minTexels = size_t(std::max(1, options_.minTexels));
+    if (node.size() < 2 * minTexels) return false;
+    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-lo);
+    for (uint32_t t : node) {
+      lo = glm::min(lo, texels_.position[t]);
+      hi = glm::max(hi, texels_.position[t]);
+    }
+    const glm::vec3 extent = hi - lo;
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    // Ray distances: the median bounds the size, the spread separates regions apart.
+    std::vector<float> d;
+    d.reserve(node.size());
+    for (uint32_t t : node) d.push_back(distanceOf(t));
+    std::sort(d.begin(), d.end());
+    const float median = d[d.size() / 2];
+    const float low = d.front(), high = d.back();
+    if (options_.maxDistanceRatio > 1.0f && std::isfinite(low) && low > 0.0f &&
+        high > options_.maxDistanceRatio * low) {
+      // Apart by ray distance, at the geometric mean of the two percentiles.
+      const float cut = std::isfinite(high) ? std::sqrt(low * high) : low * options_.maxDistanceRatio;
+      for (uint32_t t : node) (distanceOf(t) < cut ? a : b).push_back(t);
+      if (a.size() >= minTexels && b.size() >= minTexels) return true;
+      a.clear();
+      b.clear();
+    }
+    float limit = options_.clusterSize > 0.0f ? options_.clusterSize : std::numeric_limits<float>::infinity();
+    if (options_.adaptiveScale > 0.0f && std::isfinite(median))
+      limit = std::min(limit, options_.adaptiveScale * median);
+    if (!(extent[axis] > limit)) return false;
+    // At the middle of the box, moved into the 25th..75th percentile of the texels along the
+    // axis so neither half comes out tiny.
+    std::vector<float> coords;
+    coords.reserve(node.size());
+    for (uint32_t t : node) coords.push_back(texels_.position[t][axis]);
+    std::sort(coords.begin(), coords.end());
+    const float cut = std::clamp(0.5f * (lo[axis] + hi[axis]), coords[coords.size() / 4],
+                                 coords[(coords.size() * 3) / 4]);
+    for (uint32_t t : node) (texels_.position[t][axis] < cut ? a : b).push_back(t);
+    if (a.size() < minTexels || b.size() < minTexels) {
+      // Many texels on the cut (a flat surface seen edge-on): halve by index instead.
+      a.assign(node.begin(), node.begin() + long(node.size() / 2));
+      b.assign(node.begin() + long(node.size() / 2), node.end());
+    }
+    return true;
+  }
+
+  // Greedy normal cones seeded by the lowest remaining texel; a cone smaller than minTexels
+  // joins the cone whose seed normal is nearest, when that keeps the merged cone within the
+  // angle limit.
+  void cones(std::vector<uint32_t>& leaf, std::vector<std::vector<uint32_t>>& out) const {
+    std::sort(leaf.begin(), leaf.end());
+    std::vector<uint8_t> taken(leaf.size(), 0);
+    std::vector<std::vector<uint32_t>> found;
+    std::vector<glm::vec3> seeds;
+    for (size_t s = 0; s < leaf.size(); ++s) {
+      if (taken[s]) continue;
+      const glm::vec3 seed = texels_.normal[leaf[s]];
+      std::vector<uint32_t> members;
+      for (size_t i = s; i < leaf.size(); ++i) {
+        if (taken[i] || glm::dot(texels_.normal[leaf[i]], seed) < seedCos_) continue;
+        taken[i] = 1;
+        members.push_back(leaf[i]);
+      }
+      found.push_back(std::move(members));
+      seeds.push_back(seed);
+    }
+    const size_t minTexels = size_t(std::max(1, options_.minTexels));
+    const float coneCos = std::cos(glm::clamp(options_.maxNormalAngleDeg, 0.0f, 180.0f) * kPi / 180.0f);
+    for (size_t i = 0; i < found.size(); ++i) {
+      if (found[i].empty() || found[i].size() >= minTexels || found.size() == 1) continue;
+      size_t best = found.size();
+      float bestDot = -2.0f;
+      for (size_t j = 0; j < found.size(); ++j) {
+        if (j == i || found[j].empty()) continue;
+        const float d = glm::dot(seeds[i], seeds[j]);
+        if (d > bestDot && fitsCone(found[i], found[j], coneCos)) {
+          bestDot = d;
+          best = j;
+        }
+      }
+      if (best == found.size()) continue;
+      found[best].insert(found[best].end(), found[i].begin(), found[i].end());
+      std::sort(found[best].begin(), found[best].end());
+      found[i].clear();
+    }
+    for (std::vector<uint32_t>& f : found)
+      if (!f.empty()) out.push_back(std::move(f));
+  }
+
+  bool fitsCone(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b,
+                float coneCos) const {
+    glm::dvec3 sum(0.0);
+    for (const auto* list : {&a, &b})
+      for (uint32_t t : *list) sum += double(texels_.area[t]) * glm::dvec3(texels_.normal[t]);
+    if (!(glm::length(sum) > 0.0)) return false;
+    const glm::vec3 n(glm::normalize(sum));
+    for (const auto* list : {&a, &b})
+      for (uint32_t t : *list)
+        if (glm::dot(texels_.normal[t], n) < coneCos) return false;
+    return true;
+  }
+
+  const TexelSet& texels_;
+  const RayTracer* tracer_;
+  bool backs_;
+  const std::vector<float>& distance_;
+  const ClusterOptions& options_;
+  float seedCos_ = 0.0f;
+};
+
+}  // namespace
+
+Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
+                         const TexelSet& texels, const std::vector<float>& harmonicDistance,
+                         const std::vector<float>& backHarmonicDistance,
                          const ClusterOptions& options) {
   Clusters clusters;
   const uint32_t count = texels.size();
   clusters.texelCluster.assign(count, kNoTexel);
+  clusters.texelBackCluster.assign(count, kNoTexel);
   clusters.firstTexel.push_back(0);
 
   // Valid texels sorted by (instance, material, index).
@@ -86,7 +269,7 @@ Clusters computeClusters(const scenes::Scene& scene, const TexelSet& texels,
   for (uint32_t t = 0; t < count; ++t) {
     if (!texels.valid[t]) continue;
     order.push_back(t);
-    material[t] = texelMaterial(scene, texels, t);
+    material[t] = uint32_t(texelMaterial(scene, texels, t));
   }
   std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
     if (texels.instance[a] != texels.instance[b]) return texels.instance[a] < texels.instance[b];
@@ -94,19 +277,29 @@ Clusters computeClusters(const scenes::Scene& scene, const TexelSet& texels,
     return a < b;
   });
 
-  const float cellSize = options.clusterSize > 0.0f ? options.clusterSize : 1e30f;
-  // Every texel within half the cone of its seed keeps the whole cluster within the cone of the
-  // cluster's mean normal (the mean of unit vectors in a cone stays in that cone).
-  const float seedCos = std::cos(0.5f * glm::clamp(options.maxNormalAngleDeg, 0.0f, 180.0f) *
-                                 kPi / 180.0f);
+  // Front sides of every group, then the back sides of the double-sided ones.
+  const std::vector<float> none;
+  auto partition = [&](const std::vector<float>& distance, bool backs) {
+    std::vector<std::vector<uint32_t>> found;
+    GroupClusterer clusterer(texels, tracer, backs, distance.size() == count ? distance : none,
+                             options);
+    for (size_t begin = 0; begin < order.size();) {
+      size_t end = begin + 1;
+      const uint32_t first = order[begin];
+      while (end < order.size() && texels.instance[order[end]] == texels.instance[first] &&
+             material[order[end]] == material[first])
+        ++end;
+      if (!backs || scene.material(int(int32_t(material[first]))).doubleSided)
+        clusterer.run(std::vector<uint32_t>(order.begin() + long(begin), order.begin() + long(end)),
+                      found);
+      begin = end;
+    }
+    return found;
+  };
+  const std::vector<std::vector<uint32_t>> fronts = partition(harmonicDistance, false);
+  const std::vector<std::vector<uint32_t>> backs = partition(backHarmonicDistance, true);
 
-  const float coneCos =
-      std::cos(glm::clamp(options.maxNormalAngleDeg, 0.0f, 180.0f) * kPi / 180.0f);
-
-  std::vector<uint64_t> cell;
-  std::vector<uint32_t> groupTexels;
-  std::vector<uint8_t> taken;
-  auto emitCluster = [&](const std::vector<uint32_t>& members) {
+  auto emit = [&](const std::vector<uint32_t>& members, bool back) {
     const uint32_t c = clusters.size();
     double area = 0.0;
     glm::dvec3 position(0.0), normal(0.0), albedo(0.0), emission(0.0), plainPosition(0.0),
@@ -121,7 +314,7 @@ Clusters computeClusters(const scenes::Scene& scene, const TexelSet& texels,
       plainNormal += glm::dvec3(texels.normal[t]);
       albedo += a * glm::dvec3(diffuseAlbedo(scene, mat, texels.uv0[t]));
       emission += a * glm::dvec3(emittedRadiance(scene, mat, texels.uv0[t]));
-      clusters.texelCluster[t] = c;
+      (back ? clusters.texelBackCluster : clusters.texelCluster)[t] = c;
       clusters.memberTexels.push_back(t);
     }
     const double n = double(members.size());
@@ -129,8 +322,8 @@ Clusters computeClusters(const scenes::Scene& scene, const TexelSet& texels,
     clusters.position.push_back(glm::vec3(weighted ? position / area : plainPosition / n));
     if (!(glm::length(normal) > 0.0)) normal = plainNormal;
     const double length = glm::length(normal);
-    clusters.normal.push_back(length > 0.0 ? glm::vec3(normal / length)
-                                           : texels.normal[members.front()]);
+    glm::vec3 unit = length > 0.0 ? glm::vec3(normal / length) : texels.normal[members.front()];
+    clusters.normal.push_back(back ? -unit : unit);
     clusters.area.push_back(float(area));
     clusters.material.push_back(material[members.front()]);
     if (weighted) {
@@ -140,128 +333,11 @@ Clusters computeClusters(const scenes::Scene& scene, const TexelSet& texels,
       clusters.albedo.push_back(diffuseAlbedo(scene, mat, texels.uv0[members.front()]));
       clusters.emission.push_back(emittedRadiance(scene, mat, texels.uv0[members.front()]));
     }
+    clusters.back.push_back(back ? 1 : 0);
     clusters.firstTexel.push_back(uint32_t(clusters.memberTexels.size()));
   };
-
-  std::vector<Provisional> provisional;
-  for (size_t begin = 0; begin < order.size();) {
-    size_t end = begin + 1;
-    const uint32_t first = order[begin];
-    while (end < order.size() && texels.instance[order[end]] == texels.instance[first] &&
-           material[order[end]] == material[first])
-      ++end;
-
-    // A grid centred on the group, so a surface that fits one cell is not cut by the grid.
-    glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-std::numeric_limits<float>::infinity());
-    for (size_t i = begin; i < end; ++i) {
-      lo = glm::min(lo, texels.position[order[i]]);
-      hi = glm::max(hi, texels.position[order[i]]);
-    }
-    glm::ivec3 cells;
-    glm::vec3 origin;
-    for (int a = 0; a < 3; ++a) {
-      const float extent = hi[a] - lo[a];
-      cells[a] = std::max(1, int(std::min(1e6f, std::ceil(extent / cellSize - 1e-4f))));
-      origin[a] = 0.5f * (lo[a] + hi[a]) - 0.5f * float(cells[a]) * cellSize;
-    }
-    groupTexels.assign(order.begin() + long(begin), order.begin() + long(end));
-    cell.resize(count);
-    for (uint32_t t : groupTexels) {
-      glm::ivec3 c;
-      for (int a = 0; a < 3; ++a)
-        c[a] = std::clamp(int(std::floor((texels.position[t][a] - origin[a]) / cellSize)), 0,
-                          cells[a] - 1);
-      cell[t] = (uint64_t(c.z) * uint64_t(cells.y) + uint64_t(c.y)) * uint64_t(cells.x) +
-                uint64_t(c.x);
-    }
-    std::sort(groupTexels.begin(), groupTexels.end(), [&](uint32_t a, uint32_t b) {
-      return cell[a] != cell[b] ? cell[a] < cell[b] : a < b;
-    });
-
-    // Within a cell, greedy normal cones seeded by the lowest remaining texel index.
-    provisional.clear();
-    for (size_t cb = 0; cb < groupTexels.size();) {
-      size_t ce = cb + 1;
-      while (ce < groupTexels.size() && cell[groupTexels[ce]] == cell[groupTexels[cb]]) ++ce;
-      taken.assign(ce - cb, 0);
-      for (size_t s = cb; s < ce; ++s) {
-        if (taken[s - cb]) continue;
-        const glm::vec3 seed = texels.normal[groupTexels[s]];
-        Provisional pc;
-        pc.cell = cell[groupTexels[s]];
-        for (size_t i = s; i < ce; ++i) {
-          if (taken[i - cb] || glm::dot(texels.normal[groupTexels[i]], seed) < seedCos) continue;
-          taken[i - cb] = 1;
-          pc.add(texels, groupTexels[i]);
-        }
-        provisional.push_back(std::move(pc));
-      }
-      cb = ce;
-    }
-
-    // Tiny clusters (grid cells clipping a surface's edge) join the neighbouring cluster whose
-    // normal agrees best, when every texel of both stays within the cone of the merged normal.
-    const auto cellCoord = [&](uint64_t id) {
-      return glm::ivec3(int(id % uint64_t(cells.x)), int((id / uint64_t(cells.x)) % uint64_t(cells.y)),
-                        int(id / (uint64_t(cells.x) * uint64_t(cells.y))));
-    };
-    const auto cellId = [&](const glm::ivec3& c) {
-      return (uint64_t(c.z) * uint64_t(cells.y) + uint64_t(c.y)) * uint64_t(cells.x) + uint64_t(c.x);
-    };
-    // Provisional clusters come out in cell order, so a cell's clusters are one sorted range.
-    const auto cellRange = [&](uint64_t id) {
-      const auto lo = std::lower_bound(provisional.begin(), provisional.end(), id,
-                                       [](const Provisional& pc, uint64_t v) { return pc.cell < v; });
-      const auto hi = std::upper_bound(provisional.begin(), provisional.end(), id,
-                                       [](uint64_t v, const Provisional& pc) { return v < pc.cell; });
-      return std::make_pair(size_t(lo - provisional.begin()), size_t(hi - provisional.begin()));
-    };
-    const auto fitsCone = [&](const Provisional& a, const Provisional& b) {
-      glm::dvec3 n = a.normalSum + b.normalSum;
-      if (!(glm::length(n) > 0.0)) n = a.plainSum + b.plainSum;
-      if (!(glm::length(n) > 0.0)) return false;
-      const glm::vec3 unit(glm::normalize(n));
-      for (const Provisional* pc : {&a, &b})
-        for (uint32_t t : pc->members)
-          if (glm::dot(texels.normal[t], unit) < coneCos) return false;
-      return true;
-    };
-    for (size_t i = 0; i < provisional.size() && options.minTexels > 1; ++i) {
-      Provisional& small = provisional[i];
-      if (!small.alive || small.members.size() >= size_t(options.minTexels)) continue;
-      const glm::ivec3 c = cellCoord(small.cell);
-      const glm::vec3 ni = small.normal();
-      size_t best = provisional.size();
-      float bestDot = -2.0f;
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const glm::ivec3 nc = c + glm::ivec3(dx, dy, dz);
-            if (glm::any(glm::lessThan(nc, glm::ivec3(0))) ||
-                glm::any(glm::greaterThanEqual(nc, cells)))
-              continue;
-            const auto [lo, hi] = cellRange(cellId(nc));
-            for (size_t j = lo; j < hi; ++j) {
-              if (j == i || !provisional[j].alive) continue;
-              const float d = glm::dot(ni, provisional[j].normal());
-              if (d > bestDot || (d == bestDot && j < best)) {
-                if (!fitsCone(small, provisional[j])) continue;
-                bestDot = d;
-                best = j;
-              }
-            }
-          }
-      if (best == provisional.size()) continue;
-      provisional[best].merge(small);
-      small.alive = false;
-    }
-    for (Provisional& pc : provisional) {
-      if (!pc.alive) continue;
-      std::sort(pc.members.begin(), pc.members.end());
-      emitCluster(pc.members);
-    }
-    begin = end;
-  }
+  for (const std::vector<uint32_t>& members : fronts) emit(members, false);
+  for (const std::vector<uint32_t>& members : backs) emit(members, true);
   return clusters;
 }
 

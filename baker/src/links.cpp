@@ -1,5 +1,5 @@
-// Stage 3 of the precompute: form factors texel -> cluster and cluster -> cluster, sky transfer
-// and texel validity, by cosine-distributed gather rays.
+// Stage 3 of the precompute: form factors texel -> cluster and cluster -> cluster and sky
+// transfer, from the texels' gather rays (and the back-side clusters' own rays).
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -8,6 +8,7 @@
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/parallel.h"
+#include "gather_rays.h"
 #include "sampling.h"
 
 namespace afterglow::baker {
@@ -16,112 +17,44 @@ namespace {
 
 using runtime::kNoTexel;
 using runtime::kShCount;
-
-// The texel under a hit: texelAt maps it through TEXCOORD_1 and stands in a valid neighbour
-// when the hit lands in a chart's padding or on a buried texel.
-uint32_t texelUnderHit(const scenes::Scene& scene, const TexelSet& texels, const Hit& hit) {
-  return texelAt(scene, texels, hit.instance, hit.primitive, hit.triangle, hit.barycentric);
-}
+using sampling::kPi;
 
 struct Link {
   uint32_t cluster;
   float weight;
 };
 
-// One row of gathered links plus its sky transfer and back-face count. Rays are queued and
-// traced as one batch per row (the tracer's batched call has less bookkeeping per ray).
-struct Gather {
-  std::vector<Ray> queue;
-  std::vector<Hit> queueHits;
-  std::vector<uint32_t> hits;  // cluster of every ray that reached a lit surface
-  double sky[kShCount] = {};   // double: thousands of rays per row
-  int backfaces = 0;
-  int rays = 0;
-
-  void reset() {
-    queue.clear();
-    hits.clear();
-    for (double& v : sky) v = 0.0;
-    backfaces = 0;
-    rays = 0;
-  }
-};
-
-// Queues one cosine-distributed ray from `origin` around the shading normal. Directions below
-// the geometric surface are mirrored above it: a shading normal tilted away from the face must
-// not send rays into the surface the sample lies on.
-void queueGatherRay(glm::vec3 origin, const sampling::Frame& frame, glm::vec3 geometricNormal,
-                    glm::vec2 u, Gather& g) {
-  glm::vec3 dir = frame.toWorld(sampling::cosineHemisphere(u));
-  const float below = glm::dot(dir, geometricNormal);
-  if (below < 0.0f) dir = glm::normalize(dir - 2.0f * below * geometricNormal);
-  Ray ray;
-  ray.origin = origin;
-  ray.direction = dir;
-  g.queue.push_back(ray);
-}
-
-// Traces the queued rays and records what each saw.
-void traceQueue(const scenes::Scene& scene, const RayTracer& tracer, const TexelSet& texels,
-                const Clusters& clusters, Gather& g) {
-  g.queueHits.resize(g.queue.size());
-  tracer.intersect(g.queue.data(), g.queueHits.data(), g.queue.size());
-  for (size_t k = 0; k < g.queue.size(); ++k) {
-    const Hit& hit = g.queueHits[k];
-    ++g.rays;
-    if (!hit.valid()) {
-      float y[kShCount];
-      sampling::shBasis(g.queue[k].direction, y);
-      for (int i = 0; i < kShCount; ++i) g.sky[i] += double(y[i]);
-      continue;
-    }
-    if (!hit.frontFace && !tracer.material(hit).doubleSided) {
-      ++g.backfaces;
-      continue;
-    }
-    // Dynamic instances block the ray but take no part in bounces.
-    if (!scene.instances[hit.instance].isStatic) continue;
-    const uint32_t texel = texelUnderHit(scene, texels, hit);
-    if (texel == kNoTexel) continue;
-    const uint32_t cluster = clusters.texelCluster[texel];
-    if (cluster == kNoTexel) continue;
-    g.hits.push_back(cluster);
-  }
-  g.queue.clear();
-}
-
-// Turns ray counts per cluster into form factors. Links below minWeight are folded into the
-// row's strongest link so the row keeps its sum (energy) while the matrix stays sparse.
-void finishRow(Gather& g, float minWeight, std::vector<Link>& row, float* sky) {
-  row.clear();
-  const float inv = g.rays > 0 ? 1.0f / float(g.rays) : 0.0f;
-  for (int i = 0; i < kShCount; ++i) sky[i] = float(g.sky[i] * double(inv));
-  std::sort(g.hits.begin(), g.hits.end());
-  for (size_t k = 0; k < g.hits.size();) {
-    size_t e = k;
-    while (e < g.hits.size() && g.hits[e] == g.hits[k]) ++e;
-    row.push_back({g.hits[k], float(e - k) * inv});
+// Sorts a row's (cluster, weight) entries and merges duplicates. Links below minWeight are then
+// folded into the row's strongest link so the row keeps its sum (energy) while the matrix stays
+// sparse.
+void finishRow(std::vector<Link>& row, float minWeight) {
+  std::sort(row.begin(), row.end(),
+            [](const Link& a, const Link& b) { return a.cluster < b.cluster; });
+  size_t out = 0;
+  for (size_t k = 0; k < row.size();) {
+    Link merged = row[k];
+    size_t e = k + 1;
+    while (e < row.size() && row[e].cluster == merged.cluster) merged.weight += row[e++].weight;
+    row[out++] = merged;
     k = e;
   }
+  row.resize(out);
   if (row.size() < 2) return;
   size_t strongest = 0;
   for (size_t k = 1; k < row.size(); ++k)
     if (row[k].weight > row[strongest].weight) strongest = k;
   float folded = 0.0f;
-  std::vector<Link> kept;
-  kept.reserve(row.size());
+  size_t kept = 0;
   for (size_t k = 0; k < row.size(); ++k) {
     if (k != strongest && row[k].weight < minWeight) {
       folded += row[k].weight;
-    } else {
-      kept.push_back(row[k]);
+      continue;
     }
+    if (k == strongest) strongest = kept;
+    row[kept++] = row[k];
   }
-  if (folded > 0.0f) {
-    for (Link& l : kept)
-      if (l.cluster == row[strongest].cluster) l.weight += folded;
-  }
-  row.swap(kept);
+  row.resize(kept);
+  row[strongest].weight += folded;
 }
 
 void concatenate(const std::vector<std::vector<Link>>& rows, runtime::SparseLinks& links) {
@@ -186,18 +119,59 @@ void fillMaterials(const scenes::Scene& scene, const Clusters& clusters,
   }
 }
 
+// Marks, per texel, the atlas neighbours whose bounced light may smooth its own: valid, same
+// instance, same plane (normals within 30°, no step between them) and closer than filterReach ×
+// the harmonic ray distance of both. The test is symmetric, so the filter is too.
+void markFilterNeighbours(const TexelSet& texels, const TexelGather& gather,
+                          const LinkOptions& options, runtime::TransportData& transport) {
+  transport.indirectFilterPasses = std::max(0, options.filterPasses);
+  transport.texelNeighbours.assign(texels.size(), 0);
+  if (transport.indirectFilterPasses == 0) return;
+  const float minCos = std::cos(30.0f * kPi / 180.0f);
+  auto compatible = [&](uint32_t a, uint32_t b) {
+    if (!texels.valid[b] || texels.instance[a] != texels.instance[b]) return false;
+    if (glm::dot(texels.normal[a], texels.normal[b]) < minCos) return false;
+    const glm::vec3 d = texels.position[b] - texels.position[a];
+    const float distance = glm::length(d);
+    if (std::abs(glm::dot(texels.geometricNormal[a], d)) > 0.2f * distance ||
+        std::abs(glm::dot(texels.geometricNormal[b], d)) > 0.2f * distance)
+      return false;
+    const float reach = options.filterReach *
+                        std::min(gather.harmonicDistance[a], gather.harmonicDistance[b]);
+    return distance < reach;
+  };
+  parallelFor(texels.size(), [&](size_t i) {
+    const uint32_t t = uint32_t(i);
+    if (!texels.valid[t]) return;
+    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+    uint8_t mask = 0;
+    for (int k = 0; k < 8; ++k) {
+      const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[k][0];
+      const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[k][1];
+      if (x < 0 || y < 0 || x >= layout.width || y >= layout.height) continue;
+      const uint32_t n = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
+      if (n != kNoTexel && compatible(t, n)) mask |= uint8_t(1u << k);
+    }
+    transport.texelNeighbours[t] = mask;
+  });
+}
+
 }  // namespace
 
-Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, TexelSet& texels,
-                    const Clusters& clusters, const LinkOptions& options,
-                    runtime::TransportData& transport, Progress& progress) {
-  if (options.texelRays <= 0 || options.clusterRays <= 0)
-    return Status::error("computeLinks: texelRays and clusterRays must be positive");
+Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const TexelSet& texels,
+                    const TexelGather& gather, const Clusters& clusters,
+                    const LinkOptions& options, runtime::TransportData& transport,
+                    Progress& progress) {
+  if (options.clusterRays <= 0) return Status::error("computeLinks: clusterRays must be positive");
   const uint32_t texelCount = texels.size();
   const uint32_t clusterCount = clusters.size();
+  const uint32_t rays = gather.raysPerTexel;
   if (clusters.texelCluster.size() != texelCount)
     return Status::error(format("computeLinks: clusters cover %zu texels, the texel set has %u",
                                 clusters.texelCluster.size(), texelCount));
+  if (gather.hits.size() != size_t(texelCount) * rays ||
+      gather.sky.size() != size_t(texelCount) * kShCount)
+    return Status::error("computeLinks: the gather does not match the texel set");
   if (clusterCount > 0 && clusters.firstTexel.size() != size_t(clusterCount) + 1)
     return Status::error("computeLinks: Clusters::firstTexel needs one entry per cluster plus one");
 
@@ -206,80 +180,94 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, TexelSe
   transport.atlases = texels.atlases;
   fillMaterials(scene, clusters, transport);
 
-  // Texel rows. Each item writes only its own row, so the result is independent of threads.
-  const uint32_t texelRays = uint32_t(options.texelRays);
-  std::vector<std::vector<Link>> rows(texelCount);
-  // Texels found inside walls are collected apart and invalidated after the pass: texelAt reads
-  // texels.valid for every hit, so changing it during the pass would race and make links
-  // depend on thread timing.
-  std::vector<uint8_t> buried(texelCount, 0);
+  // The cluster a hit code lands in: the texel's front cluster, or its back-side cluster.
+  auto clusterOf = [&](uint32_t code) -> uint32_t {
+    if (code == TexelGather::kNoHit) return kNoTexel;
+    const uint32_t t = code & ~TexelGather::kBackSide;
+    return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
+  };
+  auto addHits = [&](uint32_t t, float weight, std::vector<Link>& row) {
+    const uint32_t* codes = &gather.hits[size_t(t) * rays];
+    for (uint32_t k = 0; k < rays; ++k) {
+      const uint32_t c = clusterOf(codes[k]);
+      if (c != kNoTexel) row.push_back({c, weight});
+    }
+  };
+
+  // Texel rows: what each texel's own rays reached.
+  std::vector<std::vector<Link>> rowsOfTexels(texelCount);
   transport.texelSky.assign(size_t(texelCount) * kShCount, 0.0f);
   progress.begin("form factors (texels)", texelCount);
   parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
-    Gather g;
     for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
       if (!texels.valid[t]) continue;
-      g.reset();
-      const sampling::Frame frame(texels.normal[t]);
-      for (uint32_t s = 0; s < texelRays; ++s) {
-        sampling::Rng rng(sampling::Stream::TexelLinks, t, s);
-        queueGatherRay(texels.position[t], frame, texels.geometricNormal[t],
-                       sampling::stratified2(rng, s, texelRays), g);
-      }
-      traceQueue(scene, tracer, texels, clusters, g);
-      if (float(g.backfaces) > options.maxBackfaceFraction * float(g.rays)) {
-        buried[t] = 1;  // inside a wall: no links, no sky; filled from neighbours later
-        continue;
-      }
-      finishRow(g, options.minWeight, rows[t], &transport.texelSky[t * kShCount]);
+      std::vector<Link>& row = rowsOfTexels[t];
+      addHits(uint32_t(t), rays > 0 ? 1.0f / float(rays) : 0.0f, row);
+      finishRow(row, options.minWeight);
+      row.shrink_to_fit();
+      std::copy_n(&gather.sky[t * kShCount], kShCount, &transport.texelSky[t * kShCount]);
     }
     progress.advance(end - begin);
   });
   progress.end();
-  if (progress.cancelled()) return Status::error("computeLinks: cancelled");
-  concatenate(rows, transport.texelLinks);
-  for (uint32_t t = 0; t < texelCount; ++t)
-    if (buried[t]) texels.valid[t] = 0;
+  if (progress.cancelled()) return Status::error("cancelled");
+  concatenate(rowsOfTexels, transport.texelLinks);
+  std::vector<std::vector<Link>>().swap(rowsOfTexels);
 
-  // Cluster rows: clusterRays rays spread round-robin over the cluster's (still) valid texels.
+  // Cluster rows. A front cluster gathers what its texels gather (area-weighted, all of their
+  // rays); a back cluster of a double-sided surface casts clusterRays rays of its own from the
+  // back of its texels (round robin, each texel stratifying its share).
   const uint32_t clusterRays = uint32_t(options.clusterRays);
-  rows.assign(clusterCount, {});
+  std::vector<std::vector<Link>> rows(clusterCount);
   transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0.0f);
   progress.begin("form factors (clusters)", clusterCount);
   parallelForBlocks(clusterCount, [&](size_t begin, size_t end, int) {
-    std::vector<uint32_t> members;
-    Gather g;
+    GatherBatch batch;
     for (size_t c = begin; c < end && !progress.cancelled(); ++c) {
-      members.clear();
-      for (uint32_t k = clusters.firstTexel[c]; k < clusters.firstTexel[c + 1]; ++k) {
-        const uint32_t t = clusters.memberTexels[k];
-        if (texels.valid[t]) members.push_back(t);
+      std::vector<Link>& row = rows[c];
+      float* sky = &transport.clusterSky[c * kShCount];
+      const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
+      if (first == last) continue;
+      if (!clusters.back[c]) {
+        double area = 0.0;
+        for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
+        for (uint32_t k = first; k < last; ++k) {
+          const uint32_t t = clusters.memberTexels[k];
+          const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
+          addHits(t, float(share / double(rays)), row);
+          for (int i = 0; i < kShCount; ++i)
+            sky[i] += float(share * double(gather.sky[size_t(t) * kShCount + size_t(i)]));
+        }
+      } else {
+        batch.clear();
+        const uint32_t m = last - first;
+        for (uint32_t s = 0; s < clusterRays; ++s) {
+          const uint32_t t = clusters.memberTexels[first + s % m];
+          const uint32_t local = s / m;
+          const uint32_t localCount = (clusterRays - s % m + m - 1) / m;
+          sampling::Rng rng(sampling::Stream::ClusterLinks, c, s);
+          const sampling::Frame frame(-texels.normal[t]);
+          batch.add(texels.backPosition(t), frame, -texels.geometricNormal[t],
+                    sampling::stratified2(rng, local, localCount));
+          if (batch.rays.size() == 256) batch.trace(scene, tracer, texels);
+        }
+        batch.trace(scene, tracer, texels);
+        const float weight = 1.0f / float(clusterRays);
+        for (uint32_t code : batch.codes) {
+          const uint32_t target = clusterOf(code);
+          if (target != kNoTexel) row.push_back({target, weight});
+        }
+        for (int i = 0; i < kShCount; ++i) sky[i] = float(batch.sky[i] * double(weight));
       }
-      if (members.empty()) continue;
-      g.reset();
-      for (uint32_t s = 0; s < clusterRays; ++s) {
-        // Each texel stratifies its own share of the rays: striding one grid over the texels
-        // would tie directions to texel positions and bias the cluster's links.
-        const uint32_t m = uint32_t(members.size());
-        const uint32_t t = members[s % m];
-        const uint32_t local = s / m;
-        const uint32_t localCount = (clusterRays - s % m + m - 1) / m;
-        sampling::Rng rng(sampling::Stream::ClusterLinks, c, s);
-        const sampling::Frame frame(texels.normal[t]);
-        queueGatherRay(texels.position[t], frame, texels.geometricNormal[t],
-                       sampling::stratified2(rng, local, localCount), g);
-        if (g.queue.size() == 256) traceQueue(scene, tracer, texels, clusters, g);
-      }
-      traceQueue(scene, tracer, texels, clusters, g);
-      // Back faces seen from a cluster reduce its reach but do not invalidate it: its texels
-      // were judged one by one above.
-      finishRow(g, options.minWeight, rows[c], &transport.clusterSky[c * kShCount]);
+      finishRow(row, options.minWeight);
+      row.shrink_to_fit();
     }
     progress.advance(end - begin);
   });
   progress.end();
-  if (progress.cancelled()) return Status::error("computeLinks: cancelled");
+  if (progress.cancelled()) return Status::error("cancelled");
   concatenate(rows, transport.clusterLinks);
+  markFilterNeighbours(texels, gather, options, transport);
   return Status::ok();
 }
 

@@ -21,6 +21,9 @@ enum class Stream : uint64_t {
   ClusterLinks = 2,
   LightVisibility = 3,
   Emissive = 4,
+  Reference = 5,
+  ReferenceView = 6,
+  BackDistance = 7,
 };
 
 // SplitMix64's finaliser: a cheap, well-mixed 64-bit hash.

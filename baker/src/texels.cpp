@@ -294,6 +294,8 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
   set.uv0.resize(count);
   set.atlas.resize(count);
   set.pixel.resize(count);
+  set.offset.resize(count);
+  set.nearGeometry.resize(count);
   set.valid.resize(count);
 
   // 3. Sample points, then push out of geometry. Each texel reads only its own record and seeds
@@ -306,11 +308,25 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
       const scenes::Instance& inst = scene.instances[r.instance];
       const scenes::Primitive& prim = scene.meshes[size_t(inst.mesh)].primitives[r.touch.primitive];
       const uint32_t* idx = &prim.indices[3 * size_t(r.touch.triangle)];
-      const float u = float(r.touch.bary.x), v = float(r.touch.bary.y), w = 1.0f - u - v;
-
       const glm::vec3 p0(inst.transform * glm::vec4(prim.positions[idx[0]], 1.0f));
       const glm::vec3 p1(inst.transform * glm::vec4(prim.positions[idx[1]], 1.0f));
       const glm::vec3 p2(inst.transform * glm::vec4(prim.positions[idx[2]], 1.0f));
+      const float texelSize = float(r.touch.texelSize);
+      // A texel centre outside its triangle gets the closest point of the triangle, which lies
+      // on an edge, often where two walls meet; rays from exactly there see through the corner.
+      // The point moves a tenth of a texel toward the triangle's centroid instead.
+      float u = float(r.touch.bary.x), v = float(r.touch.bary.y);
+      {
+        const glm::vec3 onEdge = (1.0f - u - v) * p0 + u * p1 + v * p2;
+        const glm::vec3 toCentre = (p0 + p1 + p2) / 3.0f - onEdge;
+        const float distance = glm::length(toCentre);
+        if (distance > 0.0f && r.touch.dist2 > 0.0) {
+          const float f = std::min(1.0f, 0.1f * texelSize / distance);
+          u += f * (1.0f / 3.0f - u);
+          v += f * (1.0f / 3.0f - v);
+        }
+      }
+      const float w = 1.0f - u - v;
       const glm::vec3 surface = w * p0 + u * p1 + v * p2;
       const glm::mat3 linear(inst.transform);
       // glTF's front side flips with a mirroring transform.
@@ -328,7 +344,6 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
       if (prim.uv0.size() == prim.positions.size())
         uv0 = w * prim.uv0[idx[0]] + u * prim.uv0[idx[1]] + v * prim.uv0[idx[2]];
 
-      const float texelSize = float(r.touch.texelSize);
       const float offset = std::max(options.offsetFraction * texelSize, options.minOffset);
 
       // Tangent rays just above the surface: the nearest back face of a single-sided surface
@@ -339,6 +354,7 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
       const glm::vec3 origin = surface + geo * offset;
       const float phase = hashUnit(uint32_t(ti), 0);
       float nearest = std::numeric_limits<float>::infinity();
+      bool nearGeometry = false;
       for (int k = 0; k < leakRays; ++k) {
         const float angle = 2.0f * kPi * (float(k) + phase) / float(leakRays);
         Ray ray;
@@ -346,6 +362,7 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
         ray.direction = std::cos(angle) * t + std::sin(angle) * b;
         ray.tfar = 1.5f * texelSize;
         const Hit hit = tracer.intersect(ray);
+        if (hit.valid()) nearGeometry = true;
         if (backFaceOfSingleSided(tracer, hit) && hit.t < nearest) {
           nearest = hit.t;
           sample = surface + ray.direction * hit.t + hit.geometricNormal * offset;
@@ -381,6 +398,8 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
       set.atlas[ti] = uint16_t(inst.lightmap.atlas);
       set.pixel[ti] = glm::u16vec2(r.touch.pixel % uint32_t(inst.lightmap.width),
                                    r.touch.pixel / uint32_t(inst.lightmap.width));
+      set.offset[ti] = offset;
+      set.nearGeometry[ti] = nearGeometry ? 1 : 0;
       set.valid[ti] = valid ? 1 : 0;
     }
     progress.advance(end - begin);
@@ -388,6 +407,15 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
   progress.end();
   if (progress.cancelled()) return Result<TexelSet>::error("cancelled");
   return set;
+}
+
+int texelMaterial(const scenes::Scene& scene, const TexelSet& texels, uint32_t t) {
+  const scenes::Instance& inst = scene.instances[texels.instance[t]];
+  return scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]].material;
+}
+
+bool texelDoubleSided(const scenes::Scene& scene, const TexelSet& texels, uint32_t t) {
+  return scene.material(texelMaterial(scene, texels, t)).doubleSided;
 }
 
 uint32_t texelAt(const scenes::Scene& scene, const TexelSet& texels, uint32_t instance,

@@ -2,17 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace afterglow::runtime {
 
 namespace {
-
-// Unity's albedo boost: pulls albedo toward white as the boost grows (1 leaves it unchanged).
-glm::vec3 boostAlbedo(glm::vec3 albedo, float boost) {
-  if (boost <= 1.0f) return albedo;
-  glm::vec3 a = glm::clamp(albedo, glm::vec3(0.0f), glm::vec3(1.0f));
-  return glm::pow(a, glm::vec3(1.0f / boost));
-}
 
 glm::vec3 evalSky(const glm::vec3 sh[kShCount], const float* transfer) {
   glm::vec3 sum(0.0f);
@@ -28,6 +22,12 @@ glm::vec3 sourceScale(const TransportData& data, const Source& s) {
 
 }  // namespace
 
+glm::vec3 boostAlbedo(glm::vec3 albedo, float boost) {
+  if (boost <= 1.0f) return albedo;
+  glm::vec3 a = glm::clamp(albedo, glm::vec3(0.0f), glm::vec3(1.0f));
+  return glm::pow(a, glm::vec3(1.0f / boost));
+}
+
 void constantSkySh(glm::vec3 radiance, glm::vec3 sh[kShCount]) {
   // Y00 = 1 / (2 sqrt(pi)); projecting a constant L gives L * sqrt(4 pi) * ... = L * 2 sqrt(pi).
   for (int i = 0; i < kShCount; ++i) sh[i] = glm::vec3(0.0f);
@@ -35,6 +35,47 @@ void constantSkySh(glm::vec3 radiance, glm::vec3 sh[kShCount]) {
 }
 
 Solver::Solver(const TransportData& data) : data_(data) {
+  if (data.indirectFilterPasses > 0 && data.texelNeighbours.size() == data.texelCount) {
+    // Where each texel sits: its atlas and pixel, to find its neighbours.
+    std::vector<uint32_t> where(data.texelCount, kNoTexel);
+    std::vector<uint16_t> atlasOf(data.texelCount, 0);
+    for (size_t a = 0; a < data.atlases.size(); ++a) {
+      const AtlasLayout& layout = data.atlases[a];
+      for (size_t p = 0; p < layout.texelOfPixel.size(); ++p) {
+        const uint32_t t = layout.texelOfPixel[p];
+        if (t >= data.texelCount) continue;
+        where[t] = uint32_t(p);
+        atlasOf[t] = uint16_t(a);
+      }
+    }
+    filterStart_.push_back(0);
+    for (uint32_t t = 0; t < data.texelCount; ++t) {
+      const uint8_t mask = data.texelNeighbours[t];
+      if (mask != 0 && where[t] != kNoTexel) {
+        const AtlasLayout& layout = data.atlases[atlasOf[t]];
+        const int x = int(where[t] % uint32_t(layout.width)), y = int(where[t] / uint32_t(layout.width));
+        const size_t first = filterTexel_.size();
+        float sum = 4.0f;
+        filterTexel_.push_back(t);
+        filterWeight_.push_back(4.0f);
+        for (int k = 0; k < 8; ++k) {
+          if (!(mask & (1u << k))) continue;
+          const int nx = x + kNeighbourOffsets[k][0], ny = y + kNeighbourOffsets[k][1];
+          if (nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height) continue;
+          const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
+          if (n >= data.texelCount) continue;
+          // Tent: 2 along the axes, 1 on the diagonals.
+          const float w = (kNeighbourOffsets[k][0] == 0 || kNeighbourOffsets[k][1] == 0) ? 2.0f : 1.0f;
+          filterTexel_.push_back(n);
+          filterWeight_.push_back(w);
+          sum += w;
+        }
+        for (size_t i = first; i < filterWeight_.size(); ++i) filterWeight_[i] /= sum;
+      }
+      filterStart_.push_back(uint32_t(filterTexel_.size()));
+    }
+    filterScratch_.resize(data.texelCount);
+  }
   albedo_.resize(data.clusterCount);
   clusterDirect_.resize(data.clusterCount);
   reflected_.assign(data.clusterCount, glm::vec3(0.0f));
@@ -91,22 +132,47 @@ int Solver::solve(const SolveOptions& options) {
 }
 
 void Solver::gatherTexels(std::vector<glm::vec3>& texels) const {
+  std::vector<glm::vec3> indirect;
+  gatherTexels(texels, indirect);
+  for (size_t t = 0; t < texels.size(); ++t) texels[t] += indirect[t];
+}
+
+void Solver::gatherTexels(std::vector<glm::vec3>& direct, std::vector<glm::vec3>& indirect) const {
   const uint32_t n = data_.texelCount;
-  texels.assign(n, glm::vec3(0.0f));
+  direct.assign(n, glm::vec3(0.0f));
+  indirect.assign(n, glm::vec3(0.0f));
   const SparseLinks& links = data_.texelLinks;
-  const bool hasSky = !data_.texelSky.empty();
   for (uint32_t t = 0; t < n; ++t) {
-    glm::vec3 indirect(0.0f);
+    glm::vec3 sum(0.0f);
     for (uint32_t k = links.rowStart[t]; k < links.rowStart[t + 1]; ++k)
-      indirect += links.weight[k] * reflected_[links.target[k]];
-    glm::vec3 v = data_.indirectIntensity * indirect;
-    if (hasSky) v += evalSky(data_.skySh, &data_.texelSky[size_t(t) * kShCount]);
-    texels[t] = v;
+      sum += links.weight[k] * reflected_[links.target[k]];
+    indirect[t] = data_.indirectIntensity * sum;
   }
+  filterIndirect(indirect);
+  if (!data_.texelSky.empty())
+    for (uint32_t t = 0; t < n; ++t)
+      direct[t] = evalSky(data_.skySh, &data_.texelSky[size_t(t) * kShCount]);
   for (const Source& s : data_.sources) {
     glm::vec3 scale = sourceScale(data_, s);
     if (scale == glm::vec3(0.0f) || s.texelTransfer.empty()) continue;
-    for (uint32_t t = 0; t < n; ++t) texels[t] += scale * s.texelTransfer[t];
+    for (uint32_t t = 0; t < n; ++t) direct[t] += scale * s.texelTransfer[t];
+  }
+}
+
+void Solver::filterIndirect(std::vector<glm::vec3>& indirect) const {
+  if (filterStart_.empty()) return;
+  for (int pass = 0; pass < data_.indirectFilterPasses; ++pass) {
+    for (uint32_t t = 0; t < data_.texelCount; ++t) {
+      const uint32_t begin = filterStart_[t], end = filterStart_[t + 1];
+      if (begin == end) {
+        filterScratch_[t] = indirect[t];
+        continue;
+      }
+      glm::vec3 sum(0.0f);
+      for (uint32_t k = begin; k < end; ++k) sum += filterWeight_[k] * indirect[filterTexel_[k]];
+      filterScratch_[t] = sum;
+    }
+    std::copy(filterScratch_.begin(), filterScratch_.end(), indirect.begin());
   }
 }
 

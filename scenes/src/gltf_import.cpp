@@ -828,6 +828,14 @@ class Importer {
           warn(where + ": emissiveStrength is not a non-negative number, 1 used");
       }
       m.doubleSided = src.doubleSided;
+      if (const tinygltf::Value* ag = member(src.extras, "afterglow")) {
+        if (!ag->IsObject()) {
+          warn(where + ": extras.afterglow is not an object, ignored");
+        } else if (const tinygltf::Value* v = member(*ag, "doubleSidedEmission")) {
+          if (v->IsBool()) m.doubleSidedEmission = v->Get<bool>();
+          else warn(where + ": extras.afterglow.doubleSidedEmission is not a boolean, ignored");
+        }
+      }
       if (src.alphaMode == "MASK") m.alphaMode = AlphaMode::Mask;
       else if (src.alphaMode == "BLEND") m.alphaMode = AlphaMode::Blend;
       else if (src.alphaMode != "OPAQUE" && !src.alphaMode.empty())

@@ -545,7 +545,8 @@ struct Attempt {
 // Stops after the first `limit` charts of `order` (a trial of the layout's big charts).
 Attempt packAttempt(const std::vector<Prepared>& prep, const std::vector<size_t>& order,
                     const std::vector<long long>& areaFrom, double factor, int minWidth,
-                    int padding, int maxSize, size_t limit) {
+                    int padding, int maxSize, size_t limit,
+                    const std::function<bool()>& cancelled) {
   Attempt attempt;
   attempt.placements.resize(prep.size());
   std::vector<Atlas> atlases;
@@ -571,6 +572,7 @@ Attempt packAttempt(const std::vector<Prepared>& prep, const std::vector<size_t>
     return true;
   };
   for (size_t k = 0; k < std::min(limit, order.size()); ++k) {
+    if (cancelled && k % 64 == 0 && cancelled()) break;
     const size_t i = order[k];
     ChartPlacement& out = attempt.placements[i];
     bool placed = false;
@@ -655,7 +657,7 @@ PackResult packCharts(const std::vector<PackChart>& charts, const PackOptions& o
         factors.size(),
         [&](size_t a) {
           trialArea[a] = packAttempt(prep, order, areaFrom, factors[a], minWidth, padding,
-                                     maxSize, bigCount).area;
+                                     maxSize, bigCount, options.cancelled).area;
         },
         1);
     std::vector<size_t> rank(factors.size());
@@ -673,7 +675,7 @@ PackResult packCharts(const std::vector<PackChart>& charts, const PackOptions& o
       factors.size(),
       [&](size_t a) {
         attempts[a] = packAttempt(prep, order, areaFrom, factors[a], minWidth, padding, maxSize,
-                                  order.size());
+                                  order.size(), options.cancelled);
       },
       1);
   size_t best = 0;

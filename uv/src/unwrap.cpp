@@ -113,10 +113,12 @@ Status packPerInstanceAtlas(const std::vector<InstancePack>& instances,
   out->atlasSizes.clear();
   out->placements.assign(chartCount, ChartPlacement{});
   while (!pending.empty()) {
+    if (options.cancelled && options.cancelled()) return Status::error("cancelled");
     Range r = pending.front();
     pending.erase(pending.begin());
     PackResult result;
     packRange(r.first, r.last, &result);
+    if (options.cancelled && options.cancelled()) return Status::error("cancelled");
     size_t begin = instances[r.first].firstChart;
     bool oneAtlasEach = true;
     for (size_t k = r.first; k < r.last && oneAtlasEach; ++k) {
@@ -265,7 +267,11 @@ Result<UnwrapResult> generate(Scene& scene, const UnwrapOptions& options, Progre
   progress.begin("packing", 1);
   PackResult packed;
   if (!packs.empty()) {
-    Status st = packPerInstanceAtlas(packs, charts, charts.size(), chartEnd, pack, scene, &packed);
+    PackOptions cancellable = pack;
+    cancellable.cancelled = [&progress]() { return progress.cancelled(); };
+    Status st =
+        packPerInstanceAtlas(packs, charts, charts.size(), chartEnd, cancellable, scene, &packed);
+    if (progress.cancelled()) return Status::error("cancelled");
     if (!st) return st;
   }
   progress.advance(1);

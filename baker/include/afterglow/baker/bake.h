@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "afterglow/baker/clusters.h"
+#include "afterglow/baker/reference.h"
 #include "afterglow/baker/texels.h"
 #include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/progress.h"
@@ -29,6 +30,10 @@ struct BakeOptions {
   glm::vec3 skyColor{0.0f};          // constant sky radiance, linear RGB
   std::string skyImage;              // equirect HDR image (overrides skyColor when set)
   int dilation = 2;                  // texels: how far each chart is dilated into its padding
+  // Validation: compute every texel with the reference path tracer instead of the precompute
+  // and solve (no clusters, links or transport come out).
+  bool reference = false;
+  ReferenceOptions referenceOptions;
 };
 
 struct StageTime {
@@ -40,6 +45,10 @@ struct BakeResult {
   runtime::TransportData transport;
   TexelSet texels;
   Clusters clusters;
+  // Per texel E/π: light arriving directly (sources and sky) and bounced light; texels marked
+  // invalid hold whatever the stages left (the lightmaps fill them from their neighbours).
+  std::vector<glm::vec3> texelDirect;
+  std::vector<glm::vec3> texelIndirect;
   std::vector<std::vector<glm::vec3>> lightmaps;  // per atlas, width*height linear E/π, dilated
   std::vector<StageTime> stages;
   uint64_t raysTraced = 0;

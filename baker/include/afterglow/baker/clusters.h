@@ -1,4 +1,16 @@
 // Stage 2 of the precompute: texels grouped into clusters, the nodes of the radiosity system.
+//
+// A cluster holds texels of one instance and one material within a normal cone, at most about
+// clusterSize across. Where the texels' gather rays travel short distances (corners, gaps,
+// under furniture) light changes over short distances too, so clusters there are kept smaller
+// than adaptiveScale × the harmonic mean ray distance, and texels whose distances differ by
+// more than maxDistanceRatio are not averaged together: the ceiling inside the 1 cm gap above
+// the Cornell box's lamp must not share a cluster with the ceiling the room sees, or the room
+// would be lit by the gap's trapped light.
+//
+// Double-sided surfaces have two sides but texels on the front only. Their texels are clustered
+// a second time for the back side (reversed normals, the ray distances seen from behind), into
+// clusters that take part in the bounces and are never written to a lightmap.
 #pragma once
 
 #include <cstdint>
@@ -10,32 +22,45 @@
 
 namespace afterglow::baker {
 
+class RayTracer;
+
 struct ClusterOptions {
-  float clusterSize = 0.5f;        // metres: target edge length of a cluster
+  float clusterSize = 0.5f;        // metres: largest extent of a cluster
   float maxNormalAngleDeg = 35.0f; // degrees: texels in a cluster stay within this normal cone
-  int minTexels = 4;               // count: smaller clusters join a neighbour whose normal agrees
-                                   //   (when the merged cluster still fits the cone); <= 1: off
+  int minTexels = 4;               // count: clusters are not split below this
+  float adaptiveScale = 1.0f;      // clusters stay within this × their texels' median
+                                   //   harmonic ray distance (<= 0: off)
+  float maxDistanceRatio = 4.0f;   // texels whose ray distances differ by more are split
+                                   //   apart (<= 1: off)
 };
 
 struct Clusters {
-  std::vector<uint32_t> texelCluster;  // per texel: its cluster (kNoTexel for invalid texels)
+  std::vector<uint32_t> texelCluster;  // per texel: its (front) cluster (kNoTexel for invalid)
+  std::vector<uint32_t> texelBackCluster;  // per texel: its back-side cluster (kNoTexel for
+                                           //   invalid texels and single-sided surfaces)
   // Per cluster:
   std::vector<glm::vec3> position;     // area-weighted centre
-  std::vector<glm::vec3> normal;       // area-weighted mean normal (unit)
+  std::vector<glm::vec3> normal;       // area-weighted mean normal (unit); reversed for backs
   std::vector<float> area;             // m²
   std::vector<uint32_t> material;      // index into Scene::materials (of its texels); ~0u for
                                        //   glTF's default material (primitive material -1)
   std::vector<glm::vec3> albedo;       // mean diffuse albedo (texture × factor), linear
   std::vector<glm::vec3> emission;     // mean emitted radiance, linear
+  std::vector<uint8_t> back;           // 1 for the back side of a double-sided surface
   std::vector<uint32_t> firstTexel;    // texels of cluster c: memberTexels[firstTexel[c] ..
   std::vector<uint32_t> memberTexels;  //   firstTexel[c+1])
 
   uint32_t size() const { return uint32_t(area.size()); }
 };
 
-// Groups texels within one instance and one material into clusters of about clusterSize, each
-// within a normal cone. Deterministic.
-Clusters computeClusters(const scenes::Scene& scene, const TexelSet& texels,
+// Groups the valid texels into clusters: front sides first, then the back sides of
+// double-sided surfaces. The harmonic ray distances (per texel, from the gather, seen from the
+// front and from behind; may be empty) drive the adaptive subdivision; with a tracer, texels
+// that a wall separates from the rest of their cluster are split off. Deterministic.
+Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
+                         const TexelSet& texels,
+                         const std::vector<float>& harmonicDistance = {},
+                         const std::vector<float>& backHarmonicDistance = {},
                          const ClusterOptions& options = {});
 
 // The diffuse albedo the baker uses for a material at a UV (DESIGN.md: baseColor × (1 − metallic)

@@ -40,9 +40,18 @@ struct TexelSet {
   std::vector<glm::vec2> uv0;        // material UV at the sample (for albedo/emission lookups)
   std::vector<uint16_t> atlas;       // atlas index
   std::vector<glm::u16vec2> pixel;   // texel coordinate in its atlas
+  std::vector<float> offset;         // metres: how far position sits off the surface
+  std::vector<uint8_t> nearGeometry; // 1 when other geometry comes within 1.5 texels of the
+                                     //   sample along the surface (a wall or object may cut
+                                     //   through the texel's footprint)
   std::vector<uint8_t> valid;        // 0 when the texel is buried in geometry (no light)
 
   uint32_t size() const { return uint32_t(position.size()); }
+  // The sample point on the other side of the surface (for the back of double-sided
+  // geometry): as far behind the surface as position is in front of it.
+  glm::vec3 backPosition(uint32_t t) const {
+    return position[t] - geometricNormal[t] * (2.0f * offset[t]);
+  }
 };
 
 // Rasterises every static instance's TEXCOORD_1 conservatively into its atlas and places one
@@ -50,6 +59,11 @@ struct TexelSet {
 Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& tracer,
                                const TexelOptions& options = {},
                                Progress& progress = nullProgress());
+
+// The glTF material index of a texel's primitive (-1: the default material) and whether that
+// material is double-sided.
+int texelMaterial(const scenes::Scene& scene, const TexelSet& texels, uint32_t t);
+bool texelDoubleSided(const scenes::Scene& scene, const TexelSet& texels, uint32_t t);
 
 // The texel a surface point (given by its instance, primitive, triangle and barycentrics) maps
 // to through TEXCOORD_1, or runtime::kNoTexel for dynamic instances and unbaked pixels.

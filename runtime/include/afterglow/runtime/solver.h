@@ -36,6 +36,9 @@ class Solver {
   int solve(const SolveOptions& options = {});
   // Gathers the texel values (E/π, linear RGB) from the current cluster solution.
   void gatherTexels(std::vector<glm::vec3>& texels) const;
+  // The same split in two: light that arrives directly (sources and sky) and bounced light
+  // (already scaled by indirectIntensity); their sum is gatherTexels'.
+  void gatherTexels(std::vector<glm::vec3>& direct, std::vector<glm::vec3>& indirect) const;
   // Resets the bounced light to zero (direct light only, before any pass).
   void reset();
 
@@ -43,12 +46,25 @@ class Solver {
   const std::vector<glm::vec3>& clusterAlbedo() const { return albedo_; }
 
  private:
+  // Smooths bounced light over the texelNeighbours marks, indirectFilterPasses times.
+  void filterIndirect(std::vector<glm::vec3>& indirect) const;
+
   const TransportData& data_;
+  // The indirect filter's neighbours as a sparse matrix (texel rows, tent weights that sum to
+  // one), built once from the atlas layout and the marks.
+  std::vector<uint32_t> filterStart_;
+  std::vector<uint32_t> filterTexel_;
+  std::vector<float> filterWeight_;
+  mutable std::vector<glm::vec3> filterScratch_;
   std::vector<glm::vec3> albedo_;       // boosted diffuse albedo per cluster
   std::vector<glm::vec3> clusterDirect_;  // D_c (with bounceIntensity) + S_c
   std::vector<glm::vec3> reflected_;    // R_c
   std::vector<glm::vec3> next_;
 };
+
+// Unity's albedo boost: pulls albedo toward white as the boost grows (albedo^(1/boost); 1 and
+// below leave it unchanged).
+glm::vec3 boostAlbedo(glm::vec3 albedo, float boost);
 
 // The sky colour's SH for a constant radiance (only the DC term is non-zero).
 void constantSkySh(glm::vec3 radiance, glm::vec3 sh[kShCount]);

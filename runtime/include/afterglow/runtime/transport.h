@@ -20,6 +20,10 @@ namespace afterglow::runtime {
 constexpr int kShCount = 9;               // SH L2 coefficients (bands 0..2)
 constexpr uint32_t kNoTexel = 0xffffffffu;
 
+// The eight atlas neighbours of a texel, in the bit order of TransportData::texelNeighbours.
+constexpr int kNeighbourOffsets[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0},
+                                         {1, 0},   {-1, 1}, {0, 1},  {1, 1}};
+
 // Row-compressed sparse matrix: row r links to target[k] with weight[k] for k in
 // [rowStart[r], rowStart[r+1]). Weights are form factors: the fraction of a point's
 // cosine-weighted hemisphere that sees the target cluster.
@@ -80,6 +84,13 @@ struct TransportData {
 
   SparseLinks texelLinks;    // texel -> clusters it sees
   SparseLinks clusterLinks;  // cluster -> clusters it sees
+
+  // The edge-aware smoothing of texels' bounced light (Monte Carlo gather noise): per texel, a
+  // bit per atlas neighbour (kNeighbourOffsets order) that lies on the same surface, close
+  // enough for its bounced light to stand in; indirectFilterPasses passes of a 3×3 tent over
+  // the marked neighbours. Empty or 0 passes: no smoothing.
+  std::vector<uint8_t> texelNeighbours;
+  int indirectFilterPasses = 0;
 
   // Sky transfer: E/π = Σ_i skySh[i] * transfer[i] (per texel / cluster, kShCount floats each).
   std::vector<float> texelSky;

@@ -57,6 +57,11 @@ struct Material {
   float emissiveStrength = 1.0f;        // KHR_materials_emissive_strength
   TextureRef emissiveTexture;
   bool doubleSided = false;
+  // extras.afterglow.doubleSidedEmission: an emissive double-sided surface emits from its back
+  // too. Off by default: glTF exporters mark most materials doubleSided (Blender does unless
+  // backface culling is set), and a lamp panel against a ceiling would otherwise pour light
+  // into the gap behind it; the back still reflects light as any double-sided surface does.
+  bool doubleSidedEmission = false;
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f;  // used when alphaMode == Mask
 

@@ -1,6 +1,7 @@
 // Packing charts into lightmap atlases (stage 2 of afterglow uv).
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -12,6 +13,9 @@ struct PackOptions {
   int padding = 2;              // empty texels between any two charts' conservative footprints
   int maxAtlasSize = 4096;      // texels; charts spill into further atlases beyond this
   bool allowRotation = true;    // try 90° turns when placing charts
+  // Polled between charts; returning true stops the packing early (Ctrl-C), leaving the
+  // result incomplete for the caller to discard.
+  std::function<bool()> cancelled;
 };
 
 // A chart to place: its triangles in texel units (3 points each), already scaled to the final

@@ -1,0 +1,88 @@
+// The reference path tracer: brute-force Monte Carlo for the same quantities the bake computes,
+// to validate it (`afterglow bake --reference`, `afterglow render --reference`, the accuracy
+// tests and the benchmark). It shares nothing with the precompute but the ray tracer, the
+// material functions (diffuseAlbedo, emittedRadiance) and the light models, so an error in
+// texels, clusters, links or the solver shows up as a difference.
+//
+// Light transport is the bake's: Lambertian surfaces with the baker's diffuse albedo (boosted by
+// albedoBoost at bounces), punctual lights as KHR_lights_punctual defines them with the bake's
+// soft-shadow sizes, emissive surfaces as area lights (next-event estimation with multiple
+// importance sampling), the sky as the same SH L2 radiance the bake uses (so both see the same
+// sky), back faces of single-sided geometry and dynamic instances absorb. Each light's
+// bounceIntensity scales it at bounces, indirectIntensity scales all bounced light.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/baker/texels.h"
+#include "afterglow/core/progress.h"
+#include "afterglow/core/status.h"
+#include "afterglow/runtime/transport.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::baker {
+
+class RayTracer;
+
+// What lights the scene besides its lights and emissive materials.
+struct Environment {
+  glm::vec3 skySh[runtime::kShCount] = {};  // sky radiance as SH L2 (runtime::constantSkySh)
+  float indirectIntensity = 1.0f;           // Unity's meaning, as in BakeOptions
+  float albedoBoost = 1.0f;                 // Unity's meaning, as in BakeOptions
+};
+
+struct ReferenceOptions {
+  int samples = 1024;  // paths per texel (or per pixel for views)
+  int maxDepth = 64;   // bounces after which a path stops; Russian roulette from the third
+};
+
+// Per texel E/π split by how the light arrived, and the variance of each estimate (of the
+// mean, per channel), so a comparison can tell the reference's own noise from a real error.
+struct ReferenceTexels {
+  std::vector<uint32_t> texels;       // the texels estimated (indices into the TexelSet)
+  std::vector<glm::vec3> direct;      // lights, emissive surfaces and sky seen directly
+  std::vector<glm::vec3> indirect;    // light that bounced at least once
+  std::vector<glm::vec3> directVariance;
+  std::vector<glm::vec3> indirectVariance;
+};
+
+// Estimates the given texels (all valid texels when `which` is empty). Deterministic whatever
+// the thread count: every path is seeded from (texel, sample).
+Result<ReferenceTexels> referenceTexels(const scenes::Scene& scene, const RayTracer& tracer,
+                                        const TexelSet& texels, const Environment& environment,
+                                        const ReferenceOptions& options,
+                                        const std::vector<uint32_t>& which = {},
+                                        Progress& progress = nullProgress());
+
+// How far a bake's texels are from the reference, as errors relative to each texel's own
+// reference value (so a dim corner counts as much as a texel next to a lamp, and a texel 100×
+// as bright as the rest can neither hide everyone else's error nor dominate it). Per texel,
+// over the three channels: e_t = ‖bake − ref‖ / max(‖ref‖, floor) and the signed
+// s_t = (Σ bake − Σ ref) / max(Σ ref, floor), where the floor, 10% of the mean over texels,
+// keeps near-black texels from turning tiny absolute differences into huge relative ones (the
+// role of ε in the relMSE of the denoising literature, (x − y)² / (y² + 0.01) for images of
+// order 1). Then:
+//   relativeRmse   = √mean(e_t²)       the typical error of one texel
+//   bias           = mean(s_t)          systematic over- or under-estimation
+//   referenceNoise = √mean(σ_t² / max(‖ref‖, floor)²), the reference's own noise, an upper
+//                    bound; it adds to relativeRmse in quadrature
+struct ErrorStats {
+  double relativeRmse = 0.0;
+  double bias = 0.0;
+  double referenceNoise = 0.0;
+  double referenceMean = 0.0;  // mean of Σ ref over texels (RGB summed), for scale
+};
+struct ReferenceComparison {
+  ErrorStats direct;
+  ErrorStats indirect;
+  ErrorStats total;
+  size_t texels = 0;
+};
+ReferenceComparison compareToReference(const ReferenceTexels& reference,
+                                       const std::vector<glm::vec3>& bakedDirect,
+                                       const std::vector<glm::vec3>& bakedIndirect);
+
+}  // namespace afterglow::baker

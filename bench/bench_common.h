@@ -1,0 +1,36 @@
+// Small pieces the benchmark commands share.
+#pragma once
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+#include "afterglow/core/status.h"
+#include "afterglow/scenes/gltf.h"
+#include "afterglow/scenes/procedural.h"
+
+namespace afterglow::bench {
+
+using Clock = std::chrono::steady_clock;
+inline double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+inline int fail(const std::string& message) {
+  std::fprintf(stderr, "afterglow_bench: %s\n", message.c_str());
+  return 1;
+}
+
+// A .gltf/.glb path or builtin:cornell / builtin:furnace, textures decoded.
+inline Result<scenes::Scene> loadBenchScene(const std::string& path, bool textures = true) {
+  if (path == "builtin:cornell") return scenes::makeCornellBox();
+  if (path == "builtin:furnace") return scenes::makeFurnaceBox();
+  return scenes::loadGltf(path, scenes::LoadOptions{textures});
+}
+
+const char* mark(bool ok);
+
+int benchUv(int argc, char** argv);
+int benchAccuracy(int argc, char** argv);
+
+}  // namespace afterglow::bench
