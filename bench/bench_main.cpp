@@ -1,6 +1,7 @@
 // afterglow_bench: prints the figures the issues ask for (not a test; nothing here fails a
 // build). One subcommand per capability:
 //   afterglow_bench uv [SCENE] [--texels-per-unit 16] [--threads 2]
+//   afterglow_bench bake [--threads 2] [--cornell-only | --sponza-only]
 //   afterglow_bench accuracy [SCENE] [--texels-per-unit N] [--spp N] [--stride N] ...
 #include <cstdio>
 #include <cstring>
@@ -12,9 +13,11 @@ int main(int argc, char** argv) {
   const char* command = argc >= 2 ? argv[1] : "";
   if (std::strcmp(command, "uv") == 0) return benchUv(argc, argv);
   if (std::strcmp(command, "accuracy") == 0) return benchAccuracy(argc, argv);
+  if (std::strcmp(command, "bake") == 0) return benchBake(argc, argv);
   std::fprintf(stderr,
-               "usage: afterglow_bench uv|accuracy [options]\n"
+               "usage: afterglow_bench uv|bake|accuracy [options]\n"
                "  uv        lightmap UVs of Sponza: utilisation, stretch, time (issue 2)\n"
+               "  bake      bake time, accuracy, ray throughput, memory (issue 3)\n"
                "  accuracy  a bake against the reference path tracer (Cornell box)\n");
   return 2;
 }

@@ -84,6 +84,7 @@ struct Builder {
           texels.atlas.push_back(uint16_t(inst.lightmap.atlas));
           texels.pixel.push_back({uint16_t(i), uint16_t(j)});
           texels.offset.push_back(1e-4f);
+          texels.edge.push_back(glm::length(e1) / float(n));
           texels.nearGeometry.push_back(0);
           texels.valid.push_back(1);
           auto key = std::make_pair(i / block, j / block);

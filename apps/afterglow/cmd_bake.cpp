@@ -39,14 +39,19 @@ const char kBakeHelp[] =
     "\n"
     "Options (later ones win: preset < settings file < command line):\n"
     "  -o, --output OUT/        output folder; required\n"
-    "  --texels-per-unit N      lightmap texels per metre (default 8)\n"
+    "  --texels-per-unit N|auto lightmap texels per metre (times each node's lightmapScale);\n"
+    "                           auto (the default) picks about 262,000 texels for the level\n"
+    "  --atlas-size N           instead: the most texels per metre that fit one N x N atlas\n"
     "  --uv generate|keep       new lightmap UVs (default) or the authored TEXCOORD_1\n"
-    "  --quality Q              draft | default | high: rays per texel and cluster, light and\n"
-    "                           emissive samples (32/128/4/16, 64/256/16/64, 256/1024/64/256)\n"
-    "  --texel-rays N           form-factor rays per texel\n"
-    "  --cluster-rays N         form-factor rays per cluster\n"
-    "  --light-samples N        shadow rays per texel per light with a size\n"
-    "  --emissive-samples N     samples per texel over emissive surfaces\n"
+    "  --quality Q              draft | default | high: gather rays per texel, first and\n"
+    "                           penumbra shadow rays, smoothing passes (32/8/64/3,\n"
+    "                           64/16/128/2, 256/32/512/1)\n"
+    "  --texel-rays N           gather (form-factor) rays per texel\n"
+    "  --cluster-rays N         rays per back-side cluster of double-sided surfaces\n"
+    "  --light-samples N        first shadow rays per texel per light with a size\n"
+    "  --emissive-samples N     first shadow rays per texel per emissive surface\n"
+    "  --penumbra-samples N     shadow rays where the first ones disagree (the penumbra)\n"
+    "  --filter-passes N        smoothing passes over bounced light (0: none)\n"
     "  --bounces N              bounce passes (default 0: until the change is below 0.1%)\n"
     "  --indirect-intensity X   scales all indirect light (default 1)\n"
     "  --albedo-boost X         >= 1 pushes albedo toward white for bounces (default 1)\n"
@@ -67,13 +72,17 @@ const char kBakeHelp[] =
 
 namespace {
 
+// `--texels-per-unit auto`: about a 512² atlas's worth of texels, whatever the level's scale.
+constexpr double kAutoTexels = 512.0 * 512.0;
+
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
 const std::vector<OptionSpec> kBakeOptions = {
-    {"output", 'o'},       {"texels-per-unit"}, {"uv"},
+    {"output", 'o'},       {"texels-per-unit"}, {"atlas-size"}, {"uv"},
+    {"penumbra-samples"},  {"filter-passes"},
     {"quality"},           {"texel-rays"},      {"cluster-rays"},
     {"light-samples"},     {"emissive-samples"}, {"bounces"},
     {"indirect-intensity"}, {"albedo-boost"},    {"sky"},
@@ -151,14 +160,10 @@ bool settingsArguments(const std::string& path, std::vector<std::string>* out,
   return true;
 }
 
-struct Preset {
-  int texelRays, clusterRays, lightSamples, emissiveSamples;
-};
-
-bool presetFor(const std::string& name, Preset* p) {
-  if (name == "draft") *p = {32, 128, 4, 16};
-  else if (name == "default") *p = {64, 256, 16, 64};
-  else if (name == "high") *p = {256, 1024, 64, 256};
+bool qualityFor(const std::string& name, baker::Quality* q) {
+  if (name == "draft") *q = baker::Quality::Draft;
+  else if (name == "default") *q = baker::Quality::Default;
+  else if (name == "high") *q = baker::Quality::High;
   else return false;
   return true;
 }
@@ -216,30 +221,42 @@ int runBake(int argc, char** argv, int first) {
   if (!args.has("output")) return usage("missing -o OUT/");
   const std::string outDir = args.get("output");
 
-  baker::BakeOptions options;
   uv::UnwrapOptions unwrapOptions;
   const std::string quality = args.get("quality", "default");
-  Preset preset{};
-  if (!presetFor(quality, &preset))
+  baker::Quality preset;
+  if (!qualityFor(quality, &preset))
     return usage("--quality wants draft, default or high, got '" + quality + "'");
-  int threads = 0, bounces = 0;
-  float budgetGb = 8.0f;
-  if (!args.getFloat("texels-per-unit", 8.0f, 0.0f, 1e5f, &unwrapOptions.pack.texelsPerUnit) ||
-      !args.getInt("texel-rays", preset.texelRays, 1, 1 << 20, &options.links.texelRays) ||
-      !args.getInt("cluster-rays", preset.clusterRays, 1, 1 << 20, &options.links.clusterRays) ||
-      !args.getInt("light-samples", preset.lightSamples, 1, 1 << 20,
+  baker::BakeOptions options = baker::bakePreset(preset);
+  int threads = 0, bounces = 0, atlasSize = 0;
+  float budgetGb = 8.0f, texelsPerUnit = 0.0f;
+  const std::string density = args.get("texels-per-unit", "auto");
+  if (density != "auto" &&
+      !args.getFloat("texels-per-unit", 0.0f, 1e-3f, 1e5f, &texelsPerUnit))
+    return usage(args.error() + " (or 'auto')");
+  if (!args.getInt("atlas-size", 0, 16, 16384, &atlasSize) ||
+      !args.getInt("texel-rays", options.links.texelRays, 1, 1 << 20, &options.links.texelRays) ||
+      !args.getInt("cluster-rays", options.links.clusterRays, 1, 1 << 20,
+                   &options.links.clusterRays) ||
+      !args.getInt("light-samples", options.direct.lightSamples, 1, 1 << 20,
                    &options.direct.lightSamples) ||
-      !args.getInt("emissive-samples", preset.emissiveSamples, 1, 1 << 20,
+      !args.getInt("emissive-samples", options.direct.emissiveSamples, 1, 1 << 20,
                    &options.direct.emissiveSamples) ||
+      !args.getInt("penumbra-samples", options.direct.penumbraSamples, 0, 1 << 20,
+                   &options.direct.penumbraSamples) ||
+      !args.getInt("filter-passes", options.links.filterPasses, 0, 64,
+                   &options.links.filterPasses) ||
       !args.getInt("bounces", 0, 0, 100000, &bounces) ||
       !args.getFloat("indirect-intensity", 1.0f, -1e-30f, 1e6f, &options.indirectIntensity) ||
       !args.getFloat("albedo-boost", 1.0f, 0.0f, 1e3f, &options.albedoBoost) ||
-      !args.getFloat("cluster-size", 0.5f, 0.0f, 1e6f, &options.clusters.clusterSize) ||
+      !args.getFloat("cluster-size", options.clusters.clusterSize, 0.0f, 1e6f,
+                     &options.clusters.clusterSize) ||
       !args.getInt("dilation", 2, 0, 64, &options.dilation) ||
       !args.getInt("threads", 0, 0, 1024, &threads) ||
       !args.getInt("spp", 1024, 1, 1 << 24, &options.referenceOptions.samples) ||
       !args.getFloat("memory-budget", 8.0f, 0.0f, 1e6f, &budgetGb))
     return usage(args.error());
+  if (atlasSize > 0 && texelsPerUnit > 0.0f)
+    return usage("give --texels-per-unit or --atlas-size, not both");
   options.solve.maxBounces = bounces;
   options.reference = args.has("reference");
   if (args.has("sky") && !parseVec3(args.get("sky"), &options.skyColor))
@@ -274,6 +291,27 @@ int runBake(int argc, char** argv, int first) {
   info.warnings = scene.warnings;
 
   t0 = Clock::now();
+  // Texel density: given, fitted to one atlas, or (by default) about kAutoTexels texels.
+  if (atlasSize > 0) {
+    Result<float> fitted = uv::fitTexelsPerUnit(scene, unwrapOptions, atlasSize, progress);
+    if (interrupted() || progress.cancelled()) return interruptedExit();
+    if (!fitted) {
+      printError(input + ": " + fitted.message());
+      return kExitBadInput;
+    }
+    texelsPerUnit = fitted.value();
+    unwrapOptions.pack.maxAtlasSize = atlasSize;
+  } else if (!(texelsPerUnit > 0.0f)) {
+    texelsPerUnit = uv::texelsPerUnitFor(scene, kAutoTexels);
+    if (!(texelsPerUnit > 0.0f)) {
+      printError(input + ": nothing to bake: no static instance has triangles");
+      return kExitBadInput;
+    }
+    // Two significant digits, so the report shows a number a person would pick.
+    const float magnitude = std::pow(10.0f, std::floor(std::log10(texelsPerUnit)) - 1.0f);
+    texelsPerUnit = std::round(texelsPerUnit / magnitude) * magnitude;
+  }
+  unwrapOptions.pack.texelsPerUnit = texelsPerUnit;
   Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrapOptions, progress);
   info.extraStages.push_back({"uv", secondsSince(t0)});
   if (interrupted() || progress.cancelled()) return interruptedExit();
@@ -291,8 +329,10 @@ int runBake(int argc, char** argv, int first) {
   }
   const double estimateGb = estimateBytes(scene, texels, atlasPixels, unwrapOptions.pack.texelsPerUnit, options) / 1e9;
   if (!quiet)
-    std::printf("texels        %zu in %zu atlases; estimated memory %.2f GB (budget %.2f GB)\n",
-                texels, unwrapped->metrics.atlases.size(), estimateGb, double(budgetGb));
+    std::printf("texels        %zu in %zu atlases at %.3g texels/m; estimated memory %.2f GB "
+                "(budget %.2f GB)\n",
+                texels, unwrapped->metrics.atlases.size(), double(texelsPerUnit), estimateGb,
+                double(budgetGb));
   std::fflush(stdout);
   if (estimateGb > double(budgetGb) && !args.has("yes")) {
     printError(format("bake: the estimated memory (%.2f GB for %zu texels) is over the budget of "
@@ -310,12 +350,15 @@ int runBake(int argc, char** argv, int first) {
   }
 
   nlohmann::json settings = {{"texelsPerUnit", unwrapOptions.pack.texelsPerUnit},
+                             {"atlasSize", atlasSize},
                              {"uv", mode},
                              {"quality", quality},
                              {"texelRays", options.links.texelRays},
                              {"clusterRays", options.links.clusterRays},
                              {"lightSamples", options.direct.lightSamples},
                              {"emissiveSamples", options.direct.emissiveSamples},
+                             {"penumbraSamples", options.direct.penumbraSamples},
+                             {"filterPasses", options.links.filterPasses},
                              {"bounces", bounces},
                              {"indirectIntensity", options.indirectIntensity},
                              {"albedoBoost", options.albedoBoost},

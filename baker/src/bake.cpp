@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "afterglow/baker/raytracer.h"
+#include "afterglow/core/parallel.h"
 #include "afterglow/baker/reference.h"
 #include "lightmap_post.h"
 #include "sky_image.h"
@@ -61,8 +62,7 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   t0 = Clock::now();
   progress.begin("clusters", 1);
   result.clusters =
-      computeClusters(scene, &tracer, result.texels, gather->harmonicDistance,
-                      gather->backHarmonicDistance, options.clusters);
+      computeClusters(scene, &tracer, result.texels, &gather.value(), options.clusters);
   progress.advance();
   progress.end();
   record("clusters", t0);
@@ -82,6 +82,8 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   if (!st) return st;
   record("direct", t0);
   result.raysTraced = tracer.raysTraced();
+  result.raysIntersected = tracer.raysTraced(RayTracer::Query::Intersect);
+  result.raysOccluded = tracer.raysTraced(RayTracer::Query::Occluded);
 
   applyLightSettings(scene, tr);
   tr.indirectIntensity = options.indirectIntensity;
@@ -101,6 +103,9 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   progress.begin("solve", 1);
   {
     runtime::Solver solver(tr);
+    solver.setParallelFor([](size_t count, const std::function<void(size_t, size_t)>& body) {
+      parallelForBlocks(count, [&](size_t begin, size_t end, int) { body(begin, end); }, 1);
+    });
     solver.solve(options.solve);
     solver.gatherTexels(result.texelDirect, result.texelIndirect);
   }
@@ -111,6 +116,26 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
 }
 
 }  // namespace
+
+BakeOptions bakePreset(Quality quality) {
+  BakeOptions o;  // the defaults are the default preset
+  if (quality == Quality::Draft) {
+    o.links.texelRays = 32;
+    o.links.clusterRays = 128;
+    o.links.filterPasses = 3;
+    o.direct.lightSamples = 8;
+    o.direct.emissiveSamples = 8;
+    o.direct.penumbraSamples = 64;
+  } else if (quality == Quality::High) {
+    o.links.texelRays = 256;
+    o.links.clusterRays = 1024;
+    o.links.filterPasses = 1;
+    o.direct.lightSamples = 32;
+    o.direct.emissiveSamples = 32;
+    o.direct.penumbraSamples = 512;
+  }
+  return o;
+}
 
 Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
                         Progress& progress) {
@@ -174,6 +199,8 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
     }
     record("reference", t0);
     result.raysTraced = tracer.raysTraced();
+    result.raysIntersected = tracer.raysTraced(RayTracer::Query::Intersect);
+    result.raysOccluded = tracer.raysTraced(RayTracer::Query::Occluded);
   } else {
     Status st = precomputeAndSolve(scene, tracer, options, sky, result, progress);
     if (!st) return st;

@@ -3,6 +3,7 @@
 #include "afterglow/baker/clusters.h"
 
 #include "afterglow/baker/raytracer.h"
+#include "afterglow/core/parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -154,9 +155,10 @@ class GroupClusterer {
     std::vector<float> d;
     d.reserve(node.size());
     for (uint32_t t : node) d.push_back(distanceOf(t));
-    std::sort(d.begin(), d.end());
+    const auto [minIt, maxIt] = std::minmax_element(d.begin(), d.end());
+    const float low = *minIt, high = *maxIt;
+    std::nth_element(d.begin(), d.begin() + long(d.size() / 2), d.end());
     const float median = d[d.size() / 2];
-    const float low = d.front(), high = d.back();
     if (options_.maxDistanceRatio > 1.0f && std::isfinite(low) && low > 0.0f &&
         high > options_.maxDistanceRatio * low) {
       // Apart by ray distance, at the geometric mean of the two percentiles.
@@ -175,9 +177,12 @@ class GroupClusterer {
     std::vector<float> coords;
     coords.reserve(node.size());
     for (uint32_t t : node) coords.push_back(texels_.position[t][axis]);
-    std::sort(coords.begin(), coords.end());
-    const float cut = std::clamp(0.5f * (lo[axis] + hi[axis]), coords[coords.size() / 4],
-                                 coords[(coords.size() * 3) / 4]);
+    const long q1 = long(coords.size() / 4), q3 = long((coords.size() * 3) / 4);
+    std::nth_element(coords.begin(), coords.begin() + q1, coords.end());
+    const float first = coords[size_t(q1)];
+    std::nth_element(coords.begin() + q1, coords.begin() + q3, coords.end());
+    const float third = coords[size_t(q3)];
+    const float cut = std::clamp(0.5f * (lo[axis] + hi[axis]), first, third);
     for (uint32_t t : node) (texels_.position[t][axis] < cut ? a : b).push_back(t);
     if (a.size() < minTexels || b.size() < minTexels) {
       // Many texels on the cut (a flat surface seen edge-on): halve by index instead.
@@ -254,8 +259,7 @@ class GroupClusterer {
 }  // namespace
 
 Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
-                         const TexelSet& texels, const std::vector<float>& harmonicDistance,
-                         const std::vector<float>& backHarmonicDistance,
+                         const TexelSet& texels, const TexelGather* gather,
                          const ClusterOptions& options) {
   Clusters clusters;
   const uint32_t count = texels.size();
@@ -279,25 +283,44 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
 
   // Front sides of every group, then the back sides of the double-sided ones.
   const std::vector<float> none;
+  // Groups (one instance and material) as ranges of `order`, clustered in parallel and
+  // concatenated in group order, so the result does not depend on the thread count.
+  std::vector<std::pair<size_t, size_t>> groups;
+  for (size_t begin = 0; begin < order.size();) {
+    size_t end = begin + 1;
+    const uint32_t first = order[begin];
+    while (end < order.size() && texels.instance[order[end]] == texels.instance[first] &&
+           material[order[end]] == material[first])
+      ++end;
+    groups.emplace_back(begin, end);
+    begin = end;
+  }
   auto partition = [&](const std::vector<float>& distance, bool backs) {
-    std::vector<std::vector<uint32_t>> found;
     GroupClusterer clusterer(texels, tracer, backs, distance.size() == count ? distance : none,
                              options);
-    for (size_t begin = 0; begin < order.size();) {
-      size_t end = begin + 1;
-      const uint32_t first = order[begin];
-      while (end < order.size() && texels.instance[order[end]] == texels.instance[first] &&
-             material[order[end]] == material[first])
-        ++end;
-      if (!backs || scene.material(int(int32_t(material[first]))).doubleSided)
-        clusterer.run(std::vector<uint32_t>(order.begin() + long(begin), order.begin() + long(end)),
-                      found);
-      begin = end;
-    }
+    std::vector<std::vector<std::vector<uint32_t>>> perGroup(groups.size());
+    const bool seenOnly = gather && gather->backSeen.size() == count;
+    parallelFor(groups.size(), [&](size_t g) {
+      const auto [begin, end] = groups[g];
+      std::vector<uint32_t> members(order.begin() + long(begin), order.begin() + long(end));
+      if (backs) {
+        if (!scene.material(int(int32_t(material[order[begin]]))).doubleSided) return;
+        if (seenOnly)
+          members.erase(std::remove_if(members.begin(), members.end(),
+                                       [&](uint32_t t) { return !gather->backSeen[t]; }),
+                        members.end());
+      }
+      if (!members.empty()) clusterer.run(std::move(members), perGroup[g]);
+    }, 1);
+    std::vector<std::vector<uint32_t>> found;
+    for (auto& list : perGroup)
+      for (auto& cluster : list) found.push_back(std::move(cluster));
     return found;
   };
-  const std::vector<std::vector<uint32_t>> fronts = partition(harmonicDistance, false);
-  const std::vector<std::vector<uint32_t>> backs = partition(backHarmonicDistance, true);
+  const std::vector<std::vector<uint32_t>> fronts =
+      partition(gather ? gather->harmonicDistance : none, false);
+  const std::vector<std::vector<uint32_t>> backs =
+      partition(gather ? gather->backHarmonicDistance : none, true);
 
   auto emit = [&](const std::vector<uint32_t>& members, bool back) {
     const uint32_t c = clusters.size();

@@ -40,33 +40,37 @@ bool visible(const RayTracer& tracer, const Receiver& r, glm::vec3 dir, float tf
   return !tracer.occluded(ray);
 }
 
+// One shadow estimate at a receiver: E/π for a source of unit strength, and what the rays saw.
+enum class Shade : uint8_t { Dark, Lit, Partial };
+struct Shadowed {
+  float transfer = 0.0f;
+  Shade shade = Shade::Dark;  // Dark: no light or every ray blocked; Lit: none blocked
+  bool refinable = false;     // the source has an extent, so more rays would change the answer
+};
+
 // E/π at the receiver for a light of colour 1 and intensity 1: the unshadowed transfer times
-// the fraction of stratified shadow rays over the light's extent that get through.
-float punctualTransfer(const RayTracer& tracer, const scenes::Light& light, uint32_t lightIndex,
-                       const Receiver& r, uint64_t item, const DirectOptions& options) {
+// the fraction of `rays` stratified shadow rays over the light's extent that get through.
+// Samples are numbered from `first`, so a refinement draws fresh ones.
+Shadowed punctualPass(const RayTracer& tracer, const scenes::Light& light, uint32_t lightIndex,
+                      const Receiver& r, uint64_t item, int rays, uint32_t first) {
+  Shadowed out;
   const LightView view = viewLight(light, r.position, r.normal);
-  if (!(view.transfer > 0.0f)) return 0.0f;
+  if (!(view.transfer > 0.0f)) return out;
+  if (!view.hasExtent) rays = 1;
   const uint64_t seedBase = uint64_t(lightIndex) << 32;
-  auto pass = [&](int rays, uint32_t first) {
-    int seen = 0;
-    for (int s = 0; s < rays; ++s) {
-      sampling::Rng rng(sampling::Stream::LightVisibility, item, seedBase | (first + uint32_t(s)));
-      glm::vec3 dir;
-      float length;
-      lightShadowRay(light, view, r.position,
-                     sampling::stratified2(rng, uint32_t(s), uint32_t(rays)), &dir, &length);
-      seen += visible(tracer, r, dir, length) ? 1 : 0;
-    }
-    return seen;
-  };
-  if (!view.hasExtent) return pass(1, 0) ? view.transfer : 0.0f;
-  const int rays = std::max(1, options.lightSamples);
-  const int seen = pass(rays, 0);
-  // In the penumbra a few rays leave visible noise; take many more there only.
-  if (seen > 0 && seen < rays && options.penumbraSamples > rays)
-    return view.transfer * float(pass(options.penumbraSamples, uint32_t(rays))) /
-           float(options.penumbraSamples);
-  return view.transfer * float(seen) / float(rays);
+  int seen = 0;
+  for (int s = 0; s < rays; ++s) {
+    sampling::Rng rng(sampling::Stream::LightVisibility, item, seedBase | (first + uint32_t(s)));
+    glm::vec3 dir;
+    float length;
+    lightShadowRay(light, view, r.position,
+                   sampling::stratified2(rng, uint32_t(s), uint32_t(rays)), &dir, &length);
+    seen += visible(tracer, r, dir, length) ? 1 : 0;
+  }
+  out.transfer = view.transfer * float(seen) / float(rays);
+  out.shade = seen == 0 ? Shade::Dark : seen == rays ? Shade::Lit : Shade::Partial;
+  out.refinable = view.hasExtent;
+  return out;
 }
 
 // Emitters up to this many triangles get the closed-form transfer; larger ones (an emissive
@@ -79,53 +83,44 @@ constexpr size_t kClosedFormTriangles = 64;
 // the emitter, each weighted by its unoccluded contribution (the ratio estimator of Heitz et
 // al. 2018). Fully lit and fully shadowed texels come out exact, without noise; only the
 // penumbra carries sampling error.
-float closedFormEmissiveTransfer(const RayTracer& tracer, const Emitter& e, const Receiver& r,
-                                 uint64_t item, const DirectOptions& options) {
+Shadowed closedFormEmissivePass(const RayTracer& tracer, const Emitter& e, const Receiver& r,
+                                uint64_t item, int samples, uint32_t first) {
+  Shadowed out;
   double unoccluded = 0.0;
   for (const EmitterTriangle& tri : e.triangles)
     unoccluded += double(triangleTransfer(tri, e.doubleSided, r.position, r.normal));
-  if (!(unoccluded > 0.0)) return 0.0f;
+  if (!(unoccluded > 0.0)) return out;
   const uint64_t seedBase = uint64_t(e.material) << 32;
-  // Σ weight and Σ weight × visible over `samples` stratified points; counts how many of the
-  // points that could contribute were blocked or not.
-  struct Pass {
-    double weightSum = 0.0, visibleSum = 0.0;
-    int seen = 0, blocked = 0;
-  };
-  auto pass = [&](int samples, uint32_t first) {
-    Pass p;
-    for (int s = 0; s < samples; ++s) {
-      sampling::Rng rng(sampling::Stream::Emissive, item, seedBase | (first + uint32_t(s)));
-      const EmitterSample q =
-          sampleEmitter(e, sampling::stratified2(rng, uint32_t(s), uint32_t(samples)));
-      const glm::vec3 w = q.point - r.position;
-      const float dist2 = glm::dot(w, w);
-      if (!(dist2 > 0.0f)) continue;
-      const float dist = std::sqrt(dist2);
-      const glm::vec3 dir = w / dist;
-      const float cosTheta = glm::dot(r.normal, dir);
-      float cosEmit = -glm::dot(q.normal, dir);
-      if (e.doubleSided) cosEmit = std::abs(cosEmit);
-      if (cosTheta <= 0.0f || cosEmit <= 0.0f) continue;
-      const double weight = double(cosTheta) * double(cosEmit) / double(dist2);
-      p.weightSum += weight;
-      if (visible(tracer, r, dir, dist * (1.0f - kShadowShorten))) {
-        p.visibleSum += weight;
-        ++p.seen;
-      } else {
-        ++p.blocked;
-      }
+  double weightSum = 0.0, visibleSum = 0.0;
+  int seen = 0, blocked = 0;
+  for (int s = 0; s < samples; ++s) {
+    sampling::Rng rng(sampling::Stream::Emissive, item, seedBase | (first + uint32_t(s)));
+    const EmitterSample q =
+        sampleEmitter(e, sampling::stratified2(rng, uint32_t(s), uint32_t(samples)));
+    const glm::vec3 w = q.point - r.position;
+    const float dist2 = glm::dot(w, w);
+    if (!(dist2 > 0.0f)) continue;
+    const float dist = std::sqrt(dist2);
+    const glm::vec3 dir = w / dist;
+    const float cosTheta = glm::dot(r.normal, dir);
+    float cosEmit = -glm::dot(q.normal, dir);
+    if (e.doubleSided) cosEmit = std::abs(cosEmit);
+    if (cosTheta <= 0.0f || cosEmit <= 0.0f) continue;
+    const double weight = double(cosTheta) * double(cosEmit) / double(dist2);
+    weightSum += weight;
+    if (visible(tracer, r, dir, dist * (1.0f - kShadowShorten))) {
+      visibleSum += weight;
+      ++seen;
+    } else {
+      ++blocked;
     }
-    return p;
-  };
-  const int samples = std::max(1, options.emissiveSamples);
-  Pass p = pass(samples, 0);
-  // In the penumbra a few rays leave visible noise; take many more there only.
-  if (p.seen > 0 && p.blocked > 0 && options.penumbraSamples > samples)
-    p = pass(options.penumbraSamples, uint32_t(samples));
+  }
+  out.refinable = true;
   // No sample landed on the visible part (a sliver above the horizon): too small to matter.
-  if (!(p.weightSum > 0.0)) return 0.0f;
-  return float(unoccluded * p.visibleSum / p.weightSum);
+  if (!(weightSum > 0.0)) return out;
+  out.transfer = float(unoccluded * visibleSum / weightSum);
+  out.shade = seen == 0 ? Shade::Dark : blocked == 0 ? Shade::Lit : Shade::Partial;
+  return out;
 }
 
 // E/π at the receiver from a textured or large emitter of unit radiance, (1/π) ∫ Le cosθ dω over
@@ -193,12 +188,53 @@ float sampledEmissiveTransfer(const scenes::Scene& scene, const RayTracer& trace
   return float(sum);
 }
 
-float emissiveTransfer(const scenes::Scene& scene, const RayTracer& tracer, const Emitter& e,
-                       const Receiver& r, uint64_t item, const DirectOptions& options) {
-  if (!e.textured && e.triangles.size() <= kClosedFormTriangles)
-    return closedFormEmissiveTransfer(tracer, e, r, item, options);
-  return sampledEmissiveTransfer(scene, tracer, e, r, item, options.emissiveSamples);
-}
+// Source k of the transport (lights first, then emitters) at a receiver, with `samples` rays
+// numbered from `first`.
+struct SourceSet {
+  const scenes::Scene& scene;
+  const RayTracer& tracer;
+  const std::vector<Emitter>& emitters;
+  const DirectOptions& options;
+
+  size_t size() const { return scene.lights.size() + emitters.size(); }
+
+  // Whether more shadow rays can change source k's answer: it has an extent (soft shadows).
+  bool refinable(size_t k) const {
+    if (k < scene.lights.size()) {
+      const scenes::Light& l = scene.lights[k];
+      return l.type == scenes::LightType::Directional ? l.angularDiameter > 0.0f : l.radius > 0.0f;
+    }
+    const Emitter& e = emitters[k - scene.lights.size()];
+    return !e.textured && e.triangles.size() <= kClosedFormTriangles;
+  }
+
+  Shadowed pass(size_t k, const Receiver& r, uint64_t item, bool refine) const {
+    const size_t lights = scene.lights.size();
+    if (k < lights) {
+      const int rays = refine ? options.penumbraSamples : options.lightSamples;
+      return punctualPass(tracer, scene.lights[k], uint32_t(k), r, item, std::max(1, rays),
+                          refine ? uint32_t(options.lightSamples) : 0u);
+    }
+    const Emitter& e = emitters[k - lights];
+    if (!e.textured && e.triangles.size() <= kClosedFormTriangles) {
+      const int samples = refine ? options.penumbraSamples : options.emissiveSamples;
+      return closedFormEmissivePass(tracer, e, r, item, std::max(1, samples),
+                                    refine ? uint32_t(options.emissiveSamples) : 0u);
+    }
+    Shadowed out;  // sampled with MIS, no shadow classification to refine
+    out.transfer = sampledEmissiveTransfer(scene, tracer, e, r, item, options.emissiveSamples);
+    out.shade = Shade::Lit;
+    return out;
+  }
+
+  // A pass, and a refined one when its rays disagreed (for receivers without neighbours).
+  float transfer(size_t k, const Receiver& r, uint64_t item) const {
+    const Shadowed first = pass(k, r, item, false);
+    if (first.refinable && first.shade == Shade::Partial && options.penumbraSamples > 0)
+      return pass(k, r, item, true).transfer;
+    return first.transfer;
+  }
+};
 
 }  // namespace
 
@@ -213,7 +249,6 @@ Status computeDirect(const scenes::Scene& scene, const RayTracer& tracer, const 
     return Status::error("computeDirect: Clusters::firstTexel needs one entry per cluster plus one");
 
   const std::vector<Emitter> emitters = collectEmitters(scene);
-  const size_t lightCount = scene.lights.size();
   transport.texelCount = texelCount;
   transport.clusterCount = clusterCount;
   transport.sources.clear();
@@ -238,22 +273,56 @@ Status computeDirect(const scenes::Scene& scene, const RayTracer& tracer, const 
     s.clusterTransfer.assign(clusterCount, 0.0f);
   }
 
+  // Every texel once with a few shadow rays per source, then again with many where the first
+  // rays disagreed or a neighbour's did not agree with its own (the penumbra, and a texel's
+  // width around it: a texel that saw all of a lamp with 16 rays may still be 3% shadowed).
+  const SourceSet sources{scene, tracer, emitters, options};
+  const size_t sourceCount = sources.size();
+  std::vector<uint8_t> shade(size_t(texelCount) * sourceCount, uint8_t(Shade::Dark));
+  std::vector<uint8_t> refinable(sourceCount, 0);
+  for (size_t k = 0; k < sourceCount; ++k) refinable[k] = sources.refinable(k) ? 1 : 0;
   progress.begin("direct light", texelCount);
   parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
     for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
       if (!texels.valid[t]) continue;
       const Receiver r{texels.position[t], texels.normal[t], texels.geometricNormal[t]};
-      for (size_t l = 0; l < lightCount; ++l)
-        transport.sources[l].texelTransfer[t] = punctualTransfer(
-            tracer, scene.lights[l], uint32_t(l), r, t, options);
-      for (size_t k = 0; k < emitters.size(); ++k)
-        transport.sources[lightCount + k].texelTransfer[t] =
-            emissiveTransfer(scene, tracer, emitters[k], r, t, options);
+      for (size_t k = 0; k < sourceCount; ++k) {
+        const Shadowed s = sources.pass(k, r, t, false);
+        transport.sources[k].texelTransfer[t] = s.transfer;
+        shade[t * sourceCount + k] = uint8_t(s.shade);
+      }
     }
     progress.advance(end - begin);
   });
   progress.end();
   if (progress.cancelled()) return Status::error("computeDirect: cancelled");
+  if (options.penumbraSamples > 0) {
+    progress.begin("direct light (penumbrae)", texelCount);
+    parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
+      for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
+        if (!texels.valid[t]) continue;
+        const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+        const Receiver r{texels.position[t], texels.normal[t], texels.geometricNormal[t]};
+        for (size_t k = 0; k < sourceCount; ++k) {
+          if (!refinable[k]) continue;
+          const uint8_t own = shade[t * sourceCount + k];
+          bool refine = own == uint8_t(Shade::Partial);
+          for (int n = 0; n < 8 && !refine; ++n) {
+            const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[n][0];
+            const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[n][1];
+            if (x < 0 || y < 0 || x >= layout.width || y >= layout.height) continue;
+            const uint32_t o = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
+            if (o == runtime::kNoTexel || !texels.valid[o]) continue;
+            refine = shade[size_t(o) * sourceCount + k] != own;
+          }
+          if (refine) transport.sources[k].texelTransfer[t] = sources.pass(k, r, t, true).transfer;
+        }
+      }
+      progress.advance(end - begin);
+    });
+    progress.end();
+    if (progress.cancelled()) return Status::error("computeDirect: cancelled");
+  }
 
   // Cluster transfer: area-weighted mean over the cluster's valid texels. A back-side cluster
   // of a double-sided surface has no texels of its own facing its way, so its members are
@@ -278,12 +347,8 @@ Status computeDirect(const scenes::Scene& scene, const RayTracer& tracer, const 
         }
         const Receiver r{texels.backPosition(t), -texels.normal[t], -texels.geometricNormal[t]};
         const uint64_t item = uint64_t(texelCount) + uint64_t(c) * 0x10000ull + (k & 0xffffu);
-        for (size_t l = 0; l < lightCount; ++l)
-          sums[l] += a * double(punctualTransfer(tracer, scene.lights[l], uint32_t(l), r, item,
-                                                 options));
-        for (size_t e = 0; e < emitters.size(); ++e)
-          sums[lightCount + e] +=
-              a * double(emissiveTransfer(scene, tracer, emitters[e], r, item, options));
+        for (size_t k = 0; k < sourceCount; ++k)
+          sums[k] += a * double(sources.transfer(k, r, item));
       }
       if (areaSum > 0.0)
         for (size_t i = 0; i < sums.size(); ++i) backTransfer[i][c] = float(sums[i] / areaSum);

@@ -56,44 +56,48 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   g.sky.assign(size_t(count) * kShCount, 0.0f);
   g.harmonicDistance.assign(count, std::numeric_limits<float>::infinity());
   g.backHarmonicDistance.assign(count, std::numeric_limits<float>::infinity());
-  const uint32_t backRays = std::max(4u, rays / 4);
   // Texels found inside walls are collected apart and invalidated after the pass: hits read
   // texels.valid, so changing it during the pass would race and depend on thread timing.
   std::vector<uint8_t> buried(count, 0);
+  const TexelLookup lookup(texels);
   progress.begin("gather rays", count);
+  // Texels go in groups of 16 per batch (1024 rays by default).
+  constexpr size_t kTexelsPerBatch = 16;
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     GatherBatch batch;
-    for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
-      if (!texels.valid[t]) continue;
+    std::vector<uint32_t> batchTexels;
+    for (size_t group = begin; group < end && !progress.cancelled(); group += kTexelsPerBatch) {
       batch.clear();
-      const sampling::Frame frame(texels.normal[t]);
-      for (uint32_t s = 0; s < rays; ++s) {
-        sampling::Rng rng(sampling::Stream::TexelLinks, t, s);
-        batch.add(texels.position[t], frame, texels.geometricNormal[t],
-                  sampling::stratified2(rng, s, rays));
+      batchTexels.clear();
+      for (size_t t = group; t < std::min(end, group + kTexelsPerBatch); ++t) {
+        if (!texels.valid[t]) continue;
+        batchTexels.push_back(uint32_t(t));
+        const sampling::Frame frame(texels.normal[t]);
+        sampling::Rng rng(sampling::Stream::TexelLinks, t, 0);  // one sequence per texel
+        for (uint32_t s = 0; s < rays; ++s)
+          batch.add(texels.position[t], frame, texels.geometricNormal[t],
+                    sampling::interleaved2(rng, s, rays, texels.pixel[t].x, texels.pixel[t].y));
       }
-      batch.trace(scene, tracer, texels);
-      if (float(batch.backfaces) > options.maxBackfaceFraction * float(rays)) {
-        buried[t] = 1;  // inside a wall: no links, no sky; filled from neighbours later
-        continue;
+      batch.trace(tracer, texels, &lookup);
+      for (size_t i = 0; i < batchTexels.size(); ++i) {
+        const uint32_t t = batchTexels[i];
+        const GatherBatch::Summary sum =
+            batch.summarize(tracer, i * rays, (i + 1) * rays, texels.edge[t]);
+        // Inside a wall, or wedged in a gap narrower than the texel (the 1 cm between a lamp
+        // and the ceiling): light there changes within the texel's footprint, more than one
+        // value can hold. No links, no sky; the lightmap fills it from its neighbours.
+        if (float(sum.backfaces) > options.maxBackfaceFraction * float(rays) ||
+            float(sum.close) >= options.maxEnclosedFraction * float(rays)) {
+          buried[t] = 1;
+          continue;
+        }
+        std::copy_n(batch.codes().begin() + long(i * rays), rays, g.hits.begin() + long(size_t(t) * rays));
+        for (int k = 0; k < kShCount; ++k) g.sky[size_t(t) * kShCount + size_t(k)] = float(sum.sky[k] / rays);
+        if (sum.inverseDistance > 0.0) g.harmonicDistance[t] = float(double(rays) / sum.inverseDistance);
       }
-      std::copy(batch.codes.begin(), batch.codes.end(), g.hits.begin() + long(t * rays));
-      for (int i = 0; i < kShCount; ++i) g.sky[t * kShCount + size_t(i)] = float(batch.sky[i] / rays);
-      if (batch.inverseDistance > 0.0) g.harmonicDistance[t] = float(double(rays) / batch.inverseDistance);
-      if (!texelDoubleSided(scene, texels, uint32_t(t))) continue;
-      batch.clear();
-      const sampling::Frame back(-texels.normal[t]);
-      for (uint32_t s = 0; s < backRays; ++s) {
-        sampling::Rng rng(sampling::Stream::BackDistance, t, s);
-        batch.add(texels.backPosition(uint32_t(t)), back, -texels.geometricNormal[t],
-                  sampling::stratified2(rng, s, backRays));
-      }
-      batch.trace(scene, tracer, texels);
-      if (batch.inverseDistance > 0.0)
-        g.backHarmonicDistance[t] = float(double(backRays) / batch.inverseDistance);
     }
     progress.advance(end - begin);
-  });
+  }, 4096);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
 
@@ -116,6 +120,33 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     for (uint32_t t = 0; t < count; ++t)
       if (buried[t]) std::fill_n(g.hits.begin() + long(size_t(t) * rays), rays, TexelGather::kNoHit);
   }
+  // The backs some ray reached, and how far their own rays go (for their clusters).
+  g.backSeen.assign(count, 0);
+  for (uint32_t code : g.hits)
+    if (code != TexelGather::kNoHit && (code & TexelGather::kBackSide))
+      g.backSeen[code & ~TexelGather::kBackSide] = 1;
+  const uint32_t backRays = std::max(4u, rays / 8);
+  progress.begin("gather rays (backs)", count);
+  parallelForBlocks(count, [&](size_t begin, size_t end, int) {
+    GatherBatch back;
+    for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
+      if (!g.backSeen[t] || !texels.valid[t]) continue;
+      back.clear();
+      const sampling::Frame frame(-texels.normal[t]);
+      for (uint32_t s = 0; s < backRays; ++s) {
+        sampling::Rng rng(sampling::Stream::BackDistance, t, s);
+        back.add(texels.backPosition(uint32_t(t)), frame, -texels.geometricNormal[t],
+                 sampling::stratified2(rng, s, backRays));
+      }
+      back.trace(tracer, texels, nullptr);
+      const GatherBatch::Summary seen = back.summarize(tracer, 0, backRays);
+      if (seen.inverseDistance > 0.0)
+        g.backHarmonicDistance[t] = float(double(backRays) / seen.inverseDistance);
+    }
+    progress.advance(end - begin);
+  }, 4096);
+  progress.end();
+  if (progress.cancelled()) return Status::error("cancelled");
   return g;
 }
 

@@ -15,16 +15,80 @@
 
 namespace afterglow::baker {
 
-// The texel whose light a ray hit receives: the texel under the hit point (texelAt), unless a
+// texelAtUv as one table lookup per hit (the gather's hottest path after Embree): for every
+// atlas pixel, its texel when valid, else the valid texel of the same instance among its 8
+// neighbours nearest to the pixel's centre (texelAtUv measures from the hit point instead).
+// Built from the texels' validity at the time; hits on padding pixels take texelAtUv.
+class TexelLookup {
+ public:
+  explicit TexelLookup(const TexelSet& texels) : texels_(texels) {
+    resolved_.resize(texels.atlases.size());
+    for (size_t a = 0; a < texels.atlases.size(); ++a) {
+      const runtime::AtlasLayout& layout = texels.atlases[a];
+      std::vector<uint32_t>& out = resolved_[a];
+      out.assign(layout.texelOfPixel.size(), runtime::kNoTexel);
+      for (int y = 0; y < layout.height; ++y)
+        for (int x = 0; x < layout.width; ++x) {
+          const size_t p = size_t(y) * size_t(layout.width) + size_t(x);
+          const uint32_t own = layout.texelOfPixel[p];
+          if (own != runtime::kNoTexel && texels.valid[own]) {
+            out[p] = own | (texels.nearGeometry[own] ? kNear : 0u);
+            continue;
+          }
+          if (own == runtime::kNoTexel) continue;  // padding: the slow path decides
+          float best = std::numeric_limits<float>::infinity();
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int nx = x + dx, ny = y + dy;
+              if (nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height) continue;
+              const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
+              if (n == runtime::kNoTexel || !texels.valid[n] ||
+                  texels.instance[n] != texels.instance[own])
+                continue;
+              const float d = float(dx * dx + dy * dy);
+              if (d < best) best = d, out[p] = n | (texels.nearGeometry[n] ? kNear : 0u);
+            }
+        }
+    }
+  }
+
+  // The table entry for a point, or nullptr (outside the atlas, no lightmap): fetch it early
+  // with __builtin_prefetch, the load misses the cache for nearly every hit.
+  const uint32_t* slot(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1) const {
+    const scenes::LightmapLocation& where = scene.instances[instance].lightmap;
+    if (where.atlas < 0 || size_t(where.atlas) >= resolved_.size()) return nullptr;
+    const runtime::AtlasLayout& layout = texels_.atlases[size_t(where.atlas)];
+    const float px = uv1.x * float(layout.width), py = uv1.y * float(layout.height);
+    if (!(px >= 0.0f && py >= 0.0f && px < float(layout.width) && py < float(layout.height)))
+      return nullptr;
+    return &resolved_[size_t(where.atlas)][size_t(py) * size_t(layout.width) + size_t(px)];
+  }
+
+  // The texel, with kNear set when it is near other geometry (TexelSet::nearGeometry), packed
+  // in the same table entry to save a second cache miss per hit. A point inside a chart only
+  // finds that chart's texels (charts sit `padding` texels apart), so no instance check.
+  static constexpr uint32_t kNear = 0x80000000u;
+  uint32_t resolve(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1,
+                   const uint32_t* entry) const {
+    if (entry && *entry != runtime::kNoTexel) return *entry;
+    const uint32_t t = texelAtUv(scene, texels_, instance, uv1);
+    return t == runtime::kNoTexel ? t : (t | (texels_.nearGeometry[t] ? kNear : 0u));
+  }
+
+ private:
+  const TexelSet& texels_;
+  std::vector<std::vector<uint32_t>> resolved_;
+};
+
+// The texel whose light a ray hit receives: t, the texel under the hit point, unless a
 // wall or object cuts through that texel's footprint and stands between the hit point and the
 // texel's sample, as for a floor texel half under a box: a ray from inside the box that lands
 // on the hidden half must not collect the light of the sample outside. Then the nearest texel
 // of the same chart that the hit point does see stands in; with none, the ray is absorbed.
-inline uint32_t texelOfHit(const RayTracer& tracer, const TexelSet& texels, const Hit& hit) {
-  const scenes::Scene& scene = tracer.scene();
-  const uint32_t t =
-      texelAt(scene, texels, hit.instance, hit.primitive, hit.triangle, hit.barycentric);
-  if (t == runtime::kNoTexel || !texels.nearGeometry[t]) return t;
+inline uint32_t texelOfHit(const RayTracer& tracer, const TexelSet& texels, uint32_t entry,
+                           const Hit& hit) {
+  if (entry == runtime::kNoTexel || !(entry & TexelLookup::kNear)) return entry;
+  const uint32_t t = entry & ~TexelLookup::kNear;
   const glm::vec3 side = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
   const glm::vec3 from = tracer.position(hit) + side * texels.offset[t];
   auto sees = [&](uint32_t candidate) {
@@ -61,21 +125,23 @@ inline uint32_t texelOfHit(const RayTracer& tracer, const TexelSet& texels, cons
   return best;
 }
 
-struct GatherBatch {
-  std::vector<Ray> rays;
-  std::vector<Hit> hits;
-  std::vector<uint32_t> codes;  // per ray, a TexelGather hit code
-  double sky[runtime::kShCount] = {};  // Σ SH basis over the rays that escaped
-  int backfaces = 0;                   // rays that hit the back of single-sided geometry
-  double inverseDistance = 0.0;        // Σ 1/t over rays that hit anything
+// Cosine-distributed rays of one or several texels (or a cluster), traced together: the bigger
+// the batch, the longer Embree runs before hit processing touches other memory.
+class GatherBatch {
+ public:
+  // What a range of rays saw, summed.
+  struct Summary {
+    double sky[runtime::kShCount] = {};  // Σ SH basis over the rays that escaped
+    int backfaces = 0;                   // rays that hit the back of single-sided geometry
+    double inverseDistance = 0.0;        // Σ 1/t over rays that hit anything
+    int close = 0;                       // rays that hit anything nearer than `near`
+  };
 
   void clear() {
-    rays.clear();
-    codes.clear();
-    for (double& v : sky) v = 0.0;
-    backfaces = 0;
-    inverseDistance = 0.0;
+    rays_.clear();
+    codes_.clear();
   }
+  size_t size() const { return rays_.size(); }
 
   // Queues one cosine-distributed ray about the frame's normal. Directions below the geometric
   // surface are mirrored above it: a shading normal tilted away from the face must not send
@@ -87,34 +153,71 @@ struct GatherBatch {
     Ray ray;
     ray.origin = origin;
     ray.direction = dir;
-    rays.push_back(ray);
+    rays_.push_back(ray);
   }
 
-  // Traces the queued rays (appending their codes) and empties the queue.
-  void trace(const scenes::Scene& scene, const RayTracer& tracer, const TexelSet& texels) {
-    hits.resize(rays.size());
-    tracer.intersect(rays.data(), hits.data(), rays.size());
-    for (size_t k = 0; k < rays.size(); ++k) {
-      const Hit& hit = hits[k];
-      uint32_t code = TexelGather::kNoHit;
+  // Traces the rays queued since the last trace(); with `lookup`, also finds the texel each
+  // hit lands on (codes()), without, only what summarize() needs.
+  void trace(const RayTracer& tracer, const TexelSet& texels, const TexelLookup* lookup) {
+    const size_t first = codes_.size(), count = rays_.size() - first;
+    hits_.resize(rays_.size());
+    codes_.resize(rays_.size(), TexelGather::kNoHit);
+    tracer.intersect(rays_.data() + first, hits_.data() + first, count);
+    if (!lookup) return;
+    const scenes::Scene& scene = tracer.scene();
+    // First the table entries of every hit that lands on a lit surface, prefetched, then the
+    // texels: one cache miss's latency for the batch instead of one per hit.
+    uvs_.resize(rays_.size());
+    slots_.assign(rays_.size(), nullptr);
+    for (size_t k = first; k < rays_.size(); ++k) {
+      const Hit& hit = hits_[k];
+      if (!lit(scene, tracer, hit)) continue;
+      uvs_[k] = tracer.uv(hit, 1);
+      slots_[k] = lookup->slot(scene, hit.instance, uvs_[k]);
+      if (slots_[k]) __builtin_prefetch(slots_[k]);
+    }
+    for (size_t k = first; k < rays_.size(); ++k) {
+      const Hit& hit = hits_[k];
+      if (!lit(scene, tracer, hit)) continue;
+      uint32_t t = lookup->resolve(scene, hit.instance, uvs_[k], slots_[k]);
+      if (t != runtime::kNoTexel) t = texelOfHit(tracer, texels, t, hit);
+      if (t != runtime::kNoTexel) codes_[k] = hit.frontFace ? t : (t | TexelGather::kBackSide);
+    }
+  }
+
+  // Per traced ray, a TexelGather hit code.
+  const std::vector<uint32_t>& codes() const { return codes_; }
+
+  Summary summarize(const RayTracer& tracer, size_t first, size_t last, float near = 0.0f) const {
+    Summary out;
+    for (size_t k = first; k < last; ++k) {
+      const Hit& hit = hits_[k];
       if (!hit.valid()) {
         float y[runtime::kShCount];
-        sampling::shBasis(rays[k].direction, y);
-        for (int i = 0; i < runtime::kShCount; ++i) sky[i] += double(y[i]);
-      } else {
-        if (hit.t > 0.0f) inverseDistance += 1.0 / double(hit.t);
-        if (!hit.frontFace && !tracer.material(hit).doubleSided) {
-          ++backfaces;
-        } else if (scene.instances[hit.instance].isStatic) {
-          // Dynamic instances block the ray but take no part in bounces.
-          const uint32_t t = texelOfHit(tracer, texels, hit);
-          if (t != runtime::kNoTexel) code = hit.frontFace ? t : (t | TexelGather::kBackSide);
-        }
+        sampling::shBasis(rays_[k].direction, y);
+        for (int i = 0; i < runtime::kShCount; ++i) out.sky[i] += double(y[i]);
+        continue;
       }
-      codes.push_back(code);
+      if (hit.t > 0.0f) out.inverseDistance += 1.0 / double(hit.t);
+      if (hit.t < near) ++out.close;
+      if (!hit.frontFace && !tracer.material(hit).doubleSided) ++out.backfaces;
     }
-    rays.clear();
+    return out;
   }
+
+ private:
+  // A hit on a surface that takes part in bounces: static, and seen from a side that reflects.
+  static bool lit(const scenes::Scene& scene, const RayTracer& tracer, const Hit& hit) {
+    if (!hit.valid()) return false;
+    if (!hit.frontFace && !tracer.material(hit).doubleSided) return false;
+    return scene.instances[hit.instance].isStatic;  // dynamic ones block, take no part
+  }
+
+  std::vector<Ray> rays_;
+  std::vector<Hit> hits_;
+  std::vector<uint32_t> codes_;
+  std::vector<glm::vec2> uvs_;
+  std::vector<const uint32_t*> slots_;
 };
 
 }  // namespace afterglow::baker

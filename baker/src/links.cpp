@@ -1,6 +1,7 @@
 // Stage 3 of the precompute: form factors texel -> cluster and cluster -> cluster and sky
 // transfer, from the texels' gather rays (and the back-side clusters' own rays).
 #include <algorithm>
+#include <mutex>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -24,52 +25,105 @@ struct Link {
   float weight;
 };
 
-// Sorts a row's (cluster, weight) entries and merges duplicates. Links below minWeight are then
-// folded into the row's strongest link so the row keeps its sum (energy) while the matrix stays
-// sparse.
-void finishRow(std::vector<Link>& row, float minWeight) {
-  std::sort(row.begin(), row.end(),
-            [](const Link& a, const Link& b) { return a.cluster < b.cluster; });
+// Leaves out a row's links below minWeight; the dropped weight goes to the kept ones in
+// proportion, so the row keeps its sum (its energy) and the dropped light is stood in for by
+// the row's own average.
+void dropWeakLinks(float minWeight, std::vector<Link>& row) {
+  if (!(minWeight > 0.0f)) return;
+  double total = 0.0, kept = 0.0;
   size_t out = 0;
-  for (size_t k = 0; k < row.size();) {
-    Link merged = row[k];
-    size_t e = k + 1;
-    while (e < row.size() && row[e].cluster == merged.cluster) merged.weight += row[e++].weight;
-    row[out++] = merged;
-    k = e;
+  for (const Link& l : row) {
+    total += l.weight;
+    if (l.weight < minWeight) continue;
+    kept += l.weight;
+    row[out++] = l;
   }
   row.resize(out);
-  if (row.size() < 2) return;
-  size_t strongest = 0;
-  for (size_t k = 1; k < row.size(); ++k)
-    if (row[k].weight > row[strongest].weight) strongest = k;
-  float folded = 0.0f;
-  size_t kept = 0;
-  for (size_t k = 0; k < row.size(); ++k) {
-    if (k != strongest && row[k].weight < minWeight) {
-      folded += row[k].weight;
-      continue;
-    }
-    if (k == strongest) strongest = kept;
-    row[kept++] = row[k];
-  }
-  row.resize(kept);
-  row[strongest].weight += folded;
+  if (kept > 0.0 && kept < total)
+    for (Link& l : row) l.weight = float(double(l.weight) * total / kept);
 }
 
-void concatenate(const std::vector<std::vector<Link>>& rows, runtime::SparseLinks& links) {
-  links = runtime::SparseLinks();
-  size_t total = 0;
-  for (const auto& r : rows) total += r.size();
-  links.rowStart.reserve(rows.size() + 1);
-  links.target.reserve(total);
-  links.weight.reserve(total);
-  for (const auto& r : rows) {
-    for (const Link& l : r) {
-      links.target.push_back(l.cluster);
-      links.weight.push_back(l.weight);
+// Sums a row's weights per target cluster in a dense array (one per block of rows: a row of a
+// big cluster gathers tens of thousands of rays), then emits the targets in ascending order,
+// leaving out links below minWeight.
+class RowBuilder {
+ public:
+  explicit RowBuilder(uint32_t clusters) : sum_(clusters, 0.0), seen_(clusters, 0) {}
+
+  void add(uint32_t cluster, double weight) {
+    if (!seen_[cluster]) {
+      seen_[cluster] = 1;
+      touched_.push_back(cluster);
     }
-    links.rowStart.push_back(uint32_t(links.target.size()));
+    sum_[cluster] += weight;
+  }
+
+  void finish(float minWeight, std::vector<Link>& row) {
+    std::sort(touched_.begin(), touched_.end());
+    row.clear();
+    for (uint32_t c : touched_) {
+      row.push_back({c, float(sum_[c])});
+      sum_[c] = 0.0;
+      seen_[c] = 0;
+    }
+    touched_.clear();
+    dropWeakLinks(minWeight, row);
+  }
+
+ private:
+  std::vector<double> sum_;
+  std::vector<uint8_t> seen_;
+  std::vector<uint32_t> touched_;
+};
+
+// Builds a sparse matrix row by row in parallel: fill(row, state, links) writes a row's links
+// sorted by cluster, with per-block scratch `state` from makeState(); each block of rows
+// collects its own, and the blocks are joined in row order (so the result does not depend on
+// the thread count, nor the memory on hundreds of thousands of small vectors).
+template <class MakeState, class Fill>
+void buildRows(size_t rows, Progress& progress, MakeState&& makeState, Fill&& fill,
+               runtime::SparseLinks& out, size_t grain) {
+  struct Block {
+    size_t begin = 0;
+    std::vector<uint32_t> lengths;
+    std::vector<Link> links;
+  };
+  std::vector<Block> blocks;
+  std::mutex mutex;
+  parallelForBlocks(rows, [&](size_t begin, size_t end, int) {
+    Block block;
+    block.begin = begin;
+    block.lengths.reserve(end - begin);
+    auto state = makeState();
+    std::vector<Link> row;
+    for (size_t r = begin; r < end; ++r) {
+      row.clear();
+      if (!progress.cancelled()) fill(r, state, row);
+      block.lengths.push_back(uint32_t(row.size()));
+      block.links.insert(block.links.end(), row.begin(), row.end());
+    }
+    progress.advance(end - begin);
+    std::lock_guard<std::mutex> lock(mutex);
+    blocks.push_back(std::move(block));
+  }, grain);
+  std::sort(blocks.begin(), blocks.end(),
+            [](const Block& a, const Block& b) { return a.begin < b.begin; });
+  out = runtime::SparseLinks();
+  size_t total = 0;
+  for (const Block& b : blocks) total += b.links.size();
+  out.rowStart.reserve(rows + 1);
+  out.target.reserve(total);
+  out.weight.reserve(total);
+  for (Block& b : blocks) {
+    size_t k = 0;
+    for (uint32_t length : b.lengths) {
+      for (uint32_t i = 0; i < length; ++i, ++k) {
+        out.target.push_back(b.links[k].cluster);
+        out.weight.push_back(b.links[k].weight);
+      }
+      out.rowStart.push_back(uint32_t(out.target.size()));
+    }
+    std::vector<Link>().swap(b.links);
   }
 }
 
@@ -120,10 +174,13 @@ void fillMaterials(const scenes::Scene& scene, const Clusters& clusters,
 }
 
 // Marks, per texel, the atlas neighbours whose bounced light may smooth its own: valid, same
-// instance, same plane (normals within 30°, no step between them) and closer than filterReach ×
-// the harmonic ray distance of both. The test is symmetric, so the filter is too.
-void markFilterNeighbours(const TexelSet& texels, const TexelGather& gather,
-                          const LinkOptions& options, runtime::TransportData& transport) {
+// instance, same plane (normals within 30°, no step between them), closer than filterReach ×
+// the harmonic ray distance of both, and in sight of each other (a wall standing on the floor
+// between two texels must not let the lit one brighten the one under the box). The test is
+// symmetric (the sight line runs from the lower texel index), so the filter is too.
+void markFilterNeighbours(const RayTracer& tracer, const TexelSet& texels,
+                          const TexelGather& gather, const LinkOptions& options,
+                          runtime::TransportData& transport) {
   transport.indirectFilterPasses = std::max(0, options.filterPasses);
   transport.texelNeighbours.assign(texels.size(), 0);
   if (transport.indirectFilterPasses == 0) return;
@@ -138,7 +195,18 @@ void markFilterNeighbours(const TexelSet& texels, const TexelGather& gather,
       return false;
     const float reach = options.filterReach *
                         std::min(gather.harmonicDistance[a], gather.harmonicDistance[b]);
-    return distance < reach;
+    if (!(distance < reach)) return false;
+    const uint32_t from = std::min(a, b), to = std::max(a, b);
+    const float lift = 0.25f * distance;
+    const glm::vec3 p = texels.position[from] + texels.normal[from] * lift;
+    const glm::vec3 q = texels.position[to] + texels.normal[to] * lift;
+    const float length = glm::length(q - p);
+    if (!(length > 0.0f)) return true;
+    Ray ray;
+    ray.origin = p;
+    ray.direction = (q - p) / length;
+    ray.tfar = length;
+    return !tracer.occluded(ray);
   };
   parallelFor(texels.size(), [&](size_t i) {
     const uint32_t t = uint32_t(i);
@@ -186,88 +254,97 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     const uint32_t t = code & ~TexelGather::kBackSide;
     return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
   };
-  auto addHits = [&](uint32_t t, float weight, std::vector<Link>& row) {
-    const uint32_t* codes = &gather.hits[size_t(t) * rays];
-    for (uint32_t k = 0; k < rays; ++k) {
-      const uint32_t c = clusterOf(codes[k]);
-      if (c != kNoTexel) row.push_back({c, weight});
-    }
-  };
-
-  // Texel rows: what each texel's own rays reached.
-  std::vector<std::vector<Link>> rowsOfTexels(texelCount);
+  // Texel rows: what each texel's own rays reached, counted per cluster (a sort of a few dozen
+  // cluster indices; no dense accumulator needed).
   transport.texelSky.assign(size_t(texelCount) * kShCount, 0.0f);
+  const float perRay = rays > 0 ? 1.0f / float(rays) : 0.0f;
   progress.begin("form factors (texels)", texelCount);
-  parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
-    for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
-      if (!texels.valid[t]) continue;
-      std::vector<Link>& row = rowsOfTexels[t];
-      addHits(uint32_t(t), rays > 0 ? 1.0f / float(rays) : 0.0f, row);
-      finishRow(row, options.minWeight);
-      row.shrink_to_fit();
-      std::copy_n(&gather.sky[t * kShCount], kShCount, &transport.texelSky[t * kShCount]);
-    }
-    progress.advance(end - begin);
-  });
+  buildRows(
+      texelCount, progress, [] { return std::vector<uint32_t>(); },
+      [&](size_t t, std::vector<uint32_t>& targets, std::vector<Link>& row) {
+        if (!texels.valid[t]) return;
+        targets.clear();
+        const uint32_t* codes = &gather.hits[t * rays];
+        for (uint32_t k = 0; k < rays; ++k) {
+          const uint32_t c = clusterOf(codes[k]);
+          if (c != kNoTexel) targets.push_back(c);
+        }
+        std::sort(targets.begin(), targets.end());
+        for (size_t k = 0; k < targets.size();) {
+          size_t e = k + 1;
+          while (e < targets.size() && targets[e] == targets[k]) ++e;
+          row.push_back({targets[k], float(e - k) * perRay});
+          k = e;
+        }
+        dropWeakLinks(options.minWeight, row);
+        std::copy_n(&gather.sky[t * kShCount], kShCount, &transport.texelSky[t * kShCount]);
+      },
+      transport.texelLinks, 1024);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
-  concatenate(rowsOfTexels, transport.texelLinks);
-  std::vector<std::vector<Link>>().swap(rowsOfTexels);
 
   // Cluster rows. A front cluster gathers what its texels gather (area-weighted, all of their
-  // rays); a back cluster of a double-sided surface casts clusterRays rays of its own from the
+  // rays, through their rows); a back cluster of a double-sided surface casts clusterRays rays of its own from the
   // back of its texels (round robin, each texel stratifying its share).
   const uint32_t clusterRays = uint32_t(options.clusterRays);
-  std::vector<std::vector<Link>> rows(clusterCount);
+  const TexelLookup lookup(texels);
   transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0.0f);
   progress.begin("form factors (clusters)", clusterCount);
-  parallelForBlocks(clusterCount, [&](size_t begin, size_t end, int) {
-    GatherBatch batch;
-    for (size_t c = begin; c < end && !progress.cancelled(); ++c) {
-      std::vector<Link>& row = rows[c];
-      float* sky = &transport.clusterSky[c * kShCount];
-      const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
-      if (first == last) continue;
-      if (!clusters.back[c]) {
-        double area = 0.0;
-        for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
-        for (uint32_t k = first; k < last; ++k) {
-          const uint32_t t = clusters.memberTexels[k];
-          const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
-          addHits(t, float(share / double(rays)), row);
-          for (int i = 0; i < kShCount; ++i)
-            sky[i] += float(share * double(gather.sky[size_t(t) * kShCount + size_t(i)]));
-        }
-      } else {
-        batch.clear();
-        const uint32_t m = last - first;
-        for (uint32_t s = 0; s < clusterRays; ++s) {
-          const uint32_t t = clusters.memberTexels[first + s % m];
-          const uint32_t local = s / m;
-          const uint32_t localCount = (clusterRays - s % m + m - 1) / m;
-          sampling::Rng rng(sampling::Stream::ClusterLinks, c, s);
-          const sampling::Frame frame(-texels.normal[t]);
-          batch.add(texels.backPosition(t), frame, -texels.geometricNormal[t],
-                    sampling::stratified2(rng, local, localCount));
-          if (batch.rays.size() == 256) batch.trace(scene, tracer, texels);
-        }
-        batch.trace(scene, tracer, texels);
-        const float weight = 1.0f / float(clusterRays);
-        for (uint32_t code : batch.codes) {
-          const uint32_t target = clusterOf(code);
-          if (target != kNoTexel) row.push_back({target, weight});
-        }
-        for (int i = 0; i < kShCount; ++i) sky[i] = float(batch.sky[i] * double(weight));
-      }
-      finishRow(row, options.minWeight);
-      row.shrink_to_fit();
+  // A front cluster: the area-weighted mean of its members' texel rows (all their rays).
+  auto frontRow = [&](uint32_t c, RowBuilder& row) {
+    float* sky = &transport.clusterSky[size_t(c) * kShCount];
+    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
+    double area = 0.0;
+    for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
+    const runtime::SparseLinks& tl = transport.texelLinks;
+    for (uint32_t k = first; k < last; ++k) {
+      const uint32_t t = clusters.memberTexels[k];
+      const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
+      for (uint32_t i = tl.rowStart[t]; i < tl.rowStart[t + 1]; ++i)
+        row.add(tl.target[i], share * double(tl.weight[i]));
+      for (int i = 0; i < kShCount; ++i)
+        sky[i] += float(share * double(gather.sky[size_t(t) * kShCount + size_t(i)]));
     }
-    progress.advance(end - begin);
-  });
+  };
+  // A back cluster: rays of its own from behind its texels, as many as they would cast from the
+  // front (up to clusterRays), round robin, each texel stratifying its share.
+  auto backRow = [&](uint32_t c, RowBuilder& row) {
+    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
+    const uint32_t m = last - first;
+    const uint32_t count = uint32_t(std::min<uint64_t>(clusterRays, uint64_t(rays) * m));
+    GatherBatch batch;
+    for (uint32_t s = 0; s < count; ++s) {
+      const uint32_t t = clusters.memberTexels[first + s % m];
+      const uint32_t local = s / m;
+      const uint32_t localCount = (count - s % m + m - 1) / m;
+      sampling::Rng rng(sampling::Stream::ClusterLinks, c, s);
+      const sampling::Frame frame(-texels.normal[t]);
+      batch.add(texels.backPosition(t), frame, -texels.geometricNormal[t],
+                sampling::stratified2(rng, local, localCount));
+    }
+    batch.trace(tracer, texels, &lookup);
+    const double weight = 1.0 / double(count);
+    for (uint32_t code : batch.codes()) {
+      const uint32_t target = clusterOf(code);
+      if (target != kNoTexel) row.add(target, weight);
+    }
+    const GatherBatch::Summary seen = batch.summarize(tracer, 0, count);
+    for (int i = 0; i < kShCount; ++i)
+      transport.clusterSky[size_t(c) * kShCount + size_t(i)] = float(seen.sky[i] * weight);
+  };
+  buildRows(
+      clusterCount, progress, [&] { return RowBuilder(clusterCount); },
+      [&](size_t c, RowBuilder& row, std::vector<Link>& links) {
+        if (clusters.firstTexel[c] == clusters.firstTexel[c + 1]) return;
+        if (clusters.back[c]) backRow(uint32_t(c), row);
+        else frontRow(uint32_t(c), row);
+        row.finish(options.minWeight, links);
+      },
+      // Small blocks: the back-side clusters at the end trace rays, the others don't.
+      transport.clusterLinks, 64);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
-  concatenate(rows, transport.clusterLinks);
-  markFilterNeighbours(texels, gather, options, transport);
+  markFilterNeighbours(tracer, texels, gather, options, transport);
   return Status::ok();
 }
 

@@ -1,6 +1,7 @@
 #include "afterglow/baker/raytracer.h"
 
 #include <algorithm>
+#include <cstring>
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -101,7 +102,7 @@ glm::mat3 cofactor(const glm::mat3& m) {
 // ray); later threads share an overflow slot and pay for fetch_add.
 constexpr size_t kCounterSlots = 64;
 struct alignas(64) Counter {
-  std::atomic<uint64_t> rays{0};
+  std::atomic<uint64_t> rays[2] = {};  // RayTracer::Query::Intersect, Occluded
 };
 
 // The calling thread's own slot, or kCounterSlots for the shared overflow slot.
@@ -136,9 +137,9 @@ struct RayTracer::Impl {
     if (device) rtcReleaseDevice(device);
   }
 
-  void count(uint64_t rays) const {
+  void count(uint64_t rays, Query query) const {
     const size_t slot = threadSlot();
-    std::atomic<uint64_t>& c = counters[slot].rays;
+    std::atomic<uint64_t>& c = counters[slot].rays[query == Query::Intersect ? 0 : 1];
     if (slot < kCounterSlots)
       c.store(c.load(std::memory_order_relaxed) + rays, std::memory_order_relaxed);
     else
@@ -357,7 +358,7 @@ RayTracer::RayTracer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 RayTracer::~RayTracer() = default;
 
 Hit RayTracer::intersect(const Ray& ray) const {
-  impl_->count(1);
+  impl_->count(1, Query::Intersect);
   if (!traceable(ray)) return Hit{};
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
@@ -368,7 +369,7 @@ Hit RayTracer::intersect(const Ray& ray) const {
 }
 
 bool RayTracer::occluded(const Ray& ray) const {
-  impl_->count(1);
+  impl_->count(1, Query::Occluded);
   if (!traceable(ray)) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
@@ -380,23 +381,59 @@ bool RayTracer::occluded(const Ray& ray) const {
 }
 
 void RayTracer::intersect(const Ray* rays, Hit* hits, size_t count) const {
-  impl_->count(count);
+  impl_->count(count, Query::Intersect);
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  for (size_t i = 0; i < count; ++i) {
-    if (!traceable(rays[i])) {
-      hits[i] = Hit{};
-      continue;
+  // Packets of 16 (rays of one texel share an origin, which Embree's hybrid traversal uses).
+  constexpr size_t kPacket = 16;
+  alignas(64) RTCRayHit16 packet;
+  alignas(64) int valid[kPacket];
+  for (size_t base = 0; base < count; base += kPacket) {
+    const size_t n = std::min(kPacket, count - base);
+    for (size_t i = 0; i < kPacket; ++i) {
+      const Ray* r = i < n ? &rays[base + i] : nullptr;
+      valid[i] = (r && traceable(*r)) ? -1 : 0;
+      RTCRayHit one;
+      if (valid[i]) toEmbree(*r, one);
+      else std::memset(&one, 0, sizeof(one));
+      packet.ray.org_x[i] = one.ray.org_x;
+      packet.ray.org_y[i] = one.ray.org_y;
+      packet.ray.org_z[i] = one.ray.org_z;
+      packet.ray.tnear[i] = one.ray.tnear;
+      packet.ray.dir_x[i] = one.ray.dir_x;
+      packet.ray.dir_y[i] = one.ray.dir_y;
+      packet.ray.dir_z[i] = one.ray.dir_z;
+      packet.ray.time[i] = 0.0f;
+      packet.ray.tfar[i] = valid[i] ? one.ray.tfar : -1.0f;
+      packet.ray.mask[i] = one.ray.mask;
+      packet.ray.id[i] = 0;
+      packet.ray.flags[i] = 0;
+      packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+      packet.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
+      packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
     }
-    RTCRayHit rh;
-    toEmbree(rays[i], rh);
-    rtcIntersect1(impl_->rtcScene, &context, &rh);
-    hits[i] = impl_->toHit(rays[i], rh);
+    rtcIntersect16(valid, impl_->rtcScene, &context, &packet);
+    for (size_t i = 0; i < n; ++i) {
+      if (!valid[i]) {
+        hits[base + i] = Hit{};
+        continue;
+      }
+      RTCRayHit one;
+      one.ray.tfar = packet.ray.tfar[i];
+      one.hit.geomID = packet.hit.geomID[i];
+      one.hit.primID = packet.hit.primID[i];
+      one.hit.u = packet.hit.u[i];
+      one.hit.v = packet.hit.v[i];
+      one.hit.Ng_x = packet.hit.Ng_x[i];
+      one.hit.Ng_y = packet.hit.Ng_y[i];
+      one.hit.Ng_z = packet.hit.Ng_z[i];
+      hits[base + i] = impl_->toHit(rays[base + i], one);
+    }
   }
 }
 
 void RayTracer::occluded(const Ray* rays, bool* blocked, size_t count) const {
-  impl_->count(count);
+  impl_->count(count, Query::Occluded);
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   for (size_t i = 0; i < count; ++i) {
@@ -412,13 +449,19 @@ void RayTracer::occluded(const Ray* rays, bool* blocked, size_t count) const {
 }
 
 uint64_t RayTracer::raysTraced() const {
+  return raysTraced(Query::Intersect) + raysTraced(Query::Occluded);
+}
+
+uint64_t RayTracer::raysTraced(Query query) const {
   uint64_t total = 0;
-  for (const Counter& c : impl_->counters) total += c.rays.load(std::memory_order_relaxed);
+  const int k = query == Query::Intersect ? 0 : 1;
+  for (const Counter& c : impl_->counters) total += c.rays[k].load(std::memory_order_relaxed);
   return total;
 }
 
 void RayTracer::resetRayCount() {
-  for (Counter& c : impl_->counters) c.rays.store(0, std::memory_order_relaxed);
+  for (Counter& c : impl_->counters)
+    for (std::atomic<uint64_t>& r : c.rays) r.store(0, std::memory_order_relaxed);
 }
 
 glm::vec3 RayTracer::position(const Hit& hit) const {
@@ -509,7 +552,7 @@ double RayTracer::measureRawThroughput(const Ray* rays, size_t count, Query quer
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   sink = acc;
   (void)sink;
-  impl_->count(count);
+  impl_->count(count, query);
   return seconds > 0.0 ? double(count) / seconds : 0.0;
 }
 

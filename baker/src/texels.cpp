@@ -295,6 +295,7 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
   set.atlas.resize(count);
   set.pixel.resize(count);
   set.offset.resize(count);
+  set.edge.resize(count);
   set.nearGeometry.resize(count);
   set.valid.resize(count);
 
@@ -362,7 +363,8 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
         ray.direction = std::cos(angle) * t + std::sin(angle) * b;
         ray.tfar = 1.5f * texelSize;
         const Hit hit = tracer.intersect(ray);
-        if (hit.valid()) nearGeometry = true;
+        // Geometry within the texel's footprint (its half-diagonal) may split it in two.
+        if (hit.valid() && hit.t < 0.75f * texelSize) nearGeometry = true;
         if (backFaceOfSingleSided(tracer, hit) && hit.t < nearest) {
           nearest = hit.t;
           sample = surface + ray.direction * hit.t + hit.geometricNormal * offset;
@@ -370,22 +372,9 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
       }
       const glm::vec3 position = sample + geo * offset;
 
-      // Buried: most of the hemisphere sees the inside of single-sided geometry.
-      bool valid = true;
-      if (leakRays > 0) {
-        int backHits = 0;
-        const float spin = hashUnit(uint32_t(ti), 1);
-        for (int k = 0; k < leakRays; ++k) {
-          const float cosTheta = (float(k) + 0.5f) / float(leakRays);
-          const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
-          const float phi = 2.0f * kPi * (float(k) * 0.61803398875f + spin);
-          Ray ray;
-          ray.origin = position;
-          ray.direction = sinTheta * (std::cos(phi) * t + std::sin(phi) * b) + cosTheta * geo;
-          if (backFaceOfSingleSided(tracer, tracer.intersect(ray))) ++backHits;
-        }
-        valid = 2 * backHits <= leakRays;
-      }
+      // Whether the sample is buried inside geometry is the gather's call (gatherTexels): its
+      // rays see the backs of single-sided walls from inside.
+      const bool valid = true;
 
       set.position[ti] = position;
       set.normal[ti] = shading;
@@ -399,6 +388,7 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
       set.pixel[ti] = glm::u16vec2(r.touch.pixel % uint32_t(inst.lightmap.width),
                                    r.touch.pixel / uint32_t(inst.lightmap.width));
       set.offset[ti] = offset;
+      set.edge[ti] = texelSize;
       set.nearGeometry[ti] = nearGeometry ? 1 : 0;
       set.valid[ti] = valid ? 1 : 0;
     }
@@ -422,8 +412,7 @@ uint32_t texelAt(const scenes::Scene& scene, const TexelSet& texels, uint32_t in
                  uint32_t primitive, uint32_t triangle, glm::vec2 barycentric) {
   if (instance >= scene.instances.size()) return kNoTexel;
   const scenes::Instance& inst = scene.instances[instance];
-  if (!usableInstance(scene, inst) || size_t(inst.lightmap.atlas) >= texels.atlases.size())
-    return kNoTexel;
+  if (!usableInstance(scene, inst)) return kNoTexel;
   const scenes::Mesh& mesh = scene.meshes[size_t(inst.mesh)];
   if (primitive >= mesh.primitives.size()) return kNoTexel;
   const scenes::Primitive& prim = mesh.primitives[primitive];
@@ -431,7 +420,15 @@ uint32_t texelAt(const scenes::Scene& scene, const TexelSet& texels, uint32_t in
   const uint32_t* idx = &prim.indices[3 * size_t(triangle)];
   const float u = barycentric.x, v = barycentric.y;
   const glm::vec2 uv1 = (1.0f - u - v) * prim.uv1[idx[0]] + u * prim.uv1[idx[1]] + v * prim.uv1[idx[2]];
-  const runtime::AtlasLayout& layout = texels.atlases[size_t(inst.lightmap.atlas)];
+  return texelAtUv(scene, texels, instance, uv1);
+}
+
+uint32_t texelAtUv(const scenes::Scene& scene, const TexelSet& texels, uint32_t instance,
+                   glm::vec2 uv1) {
+  if (instance >= scene.instances.size()) return kNoTexel;
+  const scenes::LightmapLocation& where = scene.instances[instance].lightmap;
+  if (where.atlas < 0 || size_t(where.atlas) >= texels.atlases.size()) return kNoTexel;
+  const runtime::AtlasLayout& layout = texels.atlases[size_t(where.atlas)];
   const glm::vec2 pixel = uv1 * glm::vec2(layout.width, layout.height);
   if (!std::isfinite(pixel.x) || !std::isfinite(pixel.y)) return kNoTexel;
   const int px = std::clamp(int(std::floor(pixel.x)), 0, layout.width - 1);

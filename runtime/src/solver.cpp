@@ -102,21 +102,41 @@ void Solver::prepare() {
 
 void Solver::reset() { std::fill(reflected_.begin(), reflected_.end(), glm::vec3(0.0f)); }
 
+namespace {
+constexpr size_t kBlock = 2048;  // clusters or texels per block of work
+}
+
+void Solver::forBlocks(size_t items, const std::function<void(size_t, size_t)>& body) const {
+  const size_t blocks = (items + kBlock - 1) / kBlock;
+  auto run = [&](size_t begin, size_t end) {
+    for (size_t b = begin; b < end; ++b) body(b * kBlock, std::min(items, (b + 1) * kBlock));
+  };
+  if (parallelFor_ && blocks > 1) parallelFor_(blocks, run);
+  else run(0, blocks);
+}
+
 float Solver::iterate() {
   const SparseLinks& links = data_.clusterLinks;
-  float maxChange = 0.0f;
-  for (uint32_t c = 0; c < data_.clusterCount; ++c) {
-    glm::vec3 gathered(0.0f);
-    for (uint32_t k = links.rowStart[c]; k < links.rowStart[c + 1]; ++k)
-      gathered += links.weight[k] * reflected_[links.target[k]];
-    glm::vec3 r = albedo_[c] * (clusterDirect_[c] + gathered);
-    glm::vec3 diff = glm::abs(r - reflected_[c]);
-    float mag = std::max({r.x, r.y, r.z});
-    float change = std::max({diff.x, diff.y, diff.z});
-    if (mag > 1e-20f) maxChange = std::max(maxChange, change / mag);
-    next_[c] = r;
-  }
+  const size_t blocks = (size_t(data_.clusterCount) + kBlock - 1) / kBlock;
+  blockChange_.assign(blocks, 0.0f);
+  forBlocks(data_.clusterCount, [&](size_t first, size_t last) {
+    float maxChange = 0.0f;
+    for (size_t c = first; c < last; ++c) {
+      glm::vec3 gathered(0.0f);
+      for (uint32_t k = links.rowStart[c]; k < links.rowStart[c + 1]; ++k)
+        gathered += links.weight[k] * reflected_[links.target[k]];
+      glm::vec3 r = albedo_[c] * (clusterDirect_[c] + gathered);
+      glm::vec3 diff = glm::abs(r - reflected_[c]);
+      float mag = std::max({r.x, r.y, r.z});
+      float change = std::max({diff.x, diff.y, diff.z});
+      if (mag > 1e-20f) maxChange = std::max(maxChange, change / mag);
+      next_[c] = r;
+    }
+    blockChange_[first / kBlock] = maxChange;
+  });
   reflected_.swap(next_);
+  float maxChange = 0.0f;
+  for (float c : blockChange_) maxChange = std::max(maxChange, c);
   return maxChange;
 }
 
@@ -142,36 +162,39 @@ void Solver::gatherTexels(std::vector<glm::vec3>& direct, std::vector<glm::vec3>
   direct.assign(n, glm::vec3(0.0f));
   indirect.assign(n, glm::vec3(0.0f));
   const SparseLinks& links = data_.texelLinks;
-  for (uint32_t t = 0; t < n; ++t) {
-    glm::vec3 sum(0.0f);
-    for (uint32_t k = links.rowStart[t]; k < links.rowStart[t + 1]; ++k)
-      sum += links.weight[k] * reflected_[links.target[k]];
-    indirect[t] = data_.indirectIntensity * sum;
-  }
+  const bool hasSky = !data_.texelSky.empty();
+  std::vector<glm::vec3> scales;
+  for (const Source& s : data_.sources) scales.push_back(sourceScale(data_, s));
+  forBlocks(n, [&](size_t first, size_t last) {
+    for (size_t t = first; t < last; ++t) {
+      glm::vec3 sum(0.0f);
+      for (uint32_t k = links.rowStart[t]; k < links.rowStart[t + 1]; ++k)
+        sum += links.weight[k] * reflected_[links.target[k]];
+      indirect[t] = data_.indirectIntensity * sum;
+      glm::vec3 d = hasSky ? evalSky(data_.skySh, &data_.texelSky[t * kShCount]) : glm::vec3(0.0f);
+      for (size_t i = 0; i < scales.size(); ++i)
+        if (!data_.sources[i].texelTransfer.empty()) d += scales[i] * data_.sources[i].texelTransfer[t];
+      direct[t] = d;
+    }
+  });
   filterIndirect(indirect);
-  if (!data_.texelSky.empty())
-    for (uint32_t t = 0; t < n; ++t)
-      direct[t] = evalSky(data_.skySh, &data_.texelSky[size_t(t) * kShCount]);
-  for (const Source& s : data_.sources) {
-    glm::vec3 scale = sourceScale(data_, s);
-    if (scale == glm::vec3(0.0f) || s.texelTransfer.empty()) continue;
-    for (uint32_t t = 0; t < n; ++t) direct[t] += scale * s.texelTransfer[t];
-  }
 }
 
 void Solver::filterIndirect(std::vector<glm::vec3>& indirect) const {
   if (filterStart_.empty()) return;
   for (int pass = 0; pass < data_.indirectFilterPasses; ++pass) {
-    for (uint32_t t = 0; t < data_.texelCount; ++t) {
-      const uint32_t begin = filterStart_[t], end = filterStart_[t + 1];
-      if (begin == end) {
-        filterScratch_[t] = indirect[t];
-        continue;
+    forBlocks(data_.texelCount, [&](size_t first, size_t last) {
+      for (size_t t = first; t < last; ++t) {
+        const uint32_t begin = filterStart_[t], end = filterStart_[t + 1];
+        if (begin == end) {
+          filterScratch_[t] = indirect[t];
+          continue;
+        }
+        glm::vec3 sum(0.0f);
+        for (uint32_t k = begin; k < end; ++k) sum += filterWeight_[k] * indirect[filterTexel_[k]];
+        filterScratch_[t] = sum;
       }
-      glm::vec3 sum(0.0f);
-      for (uint32_t k = begin; k < end; ++k) sum += filterWeight_[k] * indirect[filterTexel_[k]];
-      filterScratch_[t] = sum;
-    }
+    });
     std::copy(filterScratch_.begin(), filterScratch_.end(), indirect.begin());
   }
 }

@@ -521,4 +521,74 @@ Result<UnwrapResult> unwrap(Scene& scene, const UnwrapOptions& options, Progress
                                       : generate(scene, options, progress);
 }
 
+float texelsPerUnitFor(const Scene& scene, double texels) {
+  double area = 0.0;  // world area of static geometry, × lightmapScale²
+  for (const Instance& inst : scene.instances) {
+    if (!inst.isStatic || inst.mesh < 0 || size_t(inst.mesh) >= scene.meshes.size()) continue;
+    const double scale = double(inst.lightmapScale) * double(inst.lightmapScale);
+    for (const Primitive& prim : scene.meshes[size_t(inst.mesh)].primitives)
+      for (size_t t = 0; t + 2 < prim.indices.size(); t += 3) {
+        const uint32_t i0 = prim.indices[t], i1 = prim.indices[t + 1], i2 = prim.indices[t + 2];
+        if (i0 >= prim.positions.size() || i1 >= prim.positions.size() ||
+            i2 >= prim.positions.size())
+          continue;
+        const glm::dvec3 a(inst.transform * glm::vec4(prim.positions[i0], 1.0f));
+        const glm::dvec3 b(inst.transform * glm::vec4(prim.positions[i1], 1.0f));
+        const glm::dvec3 c(inst.transform * glm::vec4(prim.positions[i2], 1.0f));
+        const double twice = glm::length(glm::cross(b - a, c - a));
+        if (std::isfinite(twice)) area += 0.5 * scale * twice;
+      }
+  }
+  if (!(area > 0.0) || !(texels > 0.0)) return 0.0f;
+  return float(std::sqrt(texels / area));
+}
+
+Result<float> fitTexelsPerUnit(const Scene& scene, const UnwrapOptions& options, int atlasSize,
+                               Progress& progress) {
+  if (atlasSize < 16) return Status::error(format("atlas size must be at least 16, got %d", atlasSize));
+  if (options.mode != UvMode::Generate)
+    return Status::error("fitting an atlas size needs generated UVs (--uv generate)");
+  // Fits when one atlas within atlasSize² holds everything.
+  auto fits = [&](float texelsPerUnit, bool* ok) -> Status {
+    Scene copy = scene;
+    UnwrapOptions o = options;
+    o.pack.texelsPerUnit = texelsPerUnit;
+    o.pack.maxAtlasSize = atlasSize;
+    if (progress.cancelled()) return Status::error("cancelled");
+    Result<UnwrapResult> r = unwrap(copy, o);
+    progress.advance();
+    // A chart too big for the atlas fails the unwrap: too many texels per unit.
+    *ok = r && r->metrics.atlases.size() == 1;
+    return Status::ok();
+  };
+  // Start from the density that would fill the atlas at a typical 70% utilisation.
+  const float guess = texelsPerUnitFor(scene, 0.7 * double(atlasSize) * double(atlasSize));
+  if (!(guess > 0.0f)) return Status::error("no static geometry to fit into an atlas");
+  float lo = 0.0f, hi = guess;
+  bool ok = false;
+  progress.begin("fitting the atlas", 16);
+  // Grow until it no longer fits, shrink until it does.
+  for (int i = 0; i < 20; ++i) {
+    if (Status s = fits(hi, &ok); !s) return s;
+    if (!ok) break;
+    lo = hi;
+    hi *= 1.5f;
+  }
+  if (lo == 0.0f) {
+    for (int i = 0; i < 40 && lo == 0.0f; ++i) {
+      hi /= 1.5f;
+      if (Status s = fits(hi, &ok); !s) return s;
+      if (ok) lo = hi, hi *= 1.5f;
+    }
+    if (lo == 0.0f) return Status::error(format("nothing fits a %d texel atlas", atlasSize));
+  }
+  while (hi - lo > 0.01f * lo) {
+    const float mid = 0.5f * (lo + hi);
+    if (Status s = fits(mid, &ok); !s) return s;
+    (ok ? lo : hi) = mid;
+  }
+  progress.end();
+  return lo;
+}
+
 }  // namespace afterglow::uv

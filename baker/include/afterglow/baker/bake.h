@@ -36,6 +36,13 @@ struct BakeOptions {
   ReferenceOptions referenceOptions;
 };
 
+// Quality presets (`afterglow bake --quality`): rays and samples per texel.
+//   draft    32 gather rays, 8 shadow rays (64 in penumbrae), 3 smoothing passes: a quick look
+//   default  64 gather rays, 16 shadow rays (128 in penumbrae), 2 smoothing passes
+//   high     256 gather rays, 32 shadow rays (512 in penumbrae), 1 smoothing pass
+enum class Quality { Draft, Default, High };
+BakeOptions bakePreset(Quality quality);
+
 struct StageTime {
   std::string name;
   double seconds = 0.0;
@@ -51,7 +58,9 @@ struct BakeResult {
   std::vector<glm::vec3> texelIndirect;
   std::vector<std::vector<glm::vec3>> lightmaps;  // per atlas, width*height linear E/π, dilated
   std::vector<StageTime> stages;
-  uint64_t raysTraced = 0;
+  uint64_t raysTraced = 0;      // every ray of the bake
+  uint64_t raysIntersected = 0; // of which closest-hit queries (gather rays, texel placement)
+  uint64_t raysOccluded = 0;    // and any-hit queries (shadow and visibility rays)
   std::vector<std::string> warnings;
 };
 

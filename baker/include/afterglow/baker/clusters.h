@@ -8,9 +8,10 @@
 // the Cornell box's lamp must not share a cluster with the ceiling the room sees, or the room
 // would be lit by the gap's trapped light.
 //
-// Double-sided surfaces have two sides but texels on the front only. Their texels are clustered
-// a second time for the back side (reversed normals, the ray distances seen from behind), into
-// clusters that take part in the bounces and are never written to a lightmap.
+// Double-sided surfaces have two sides but texels on the front only. Where the gather saw their
+// back, their texels are clustered a second time for the back side (reversed normals, the ray
+// distances seen from behind), into clusters that take part in the bounces and are never
+// written to a lightmap.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +19,7 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/baker/gather.h"
 #include "afterglow/baker/texels.h"
 
 namespace afterglow::baker {
@@ -27,8 +29,8 @@ class RayTracer;
 struct ClusterOptions {
   float clusterSize = 0.5f;        // metres: largest extent of a cluster
   float maxNormalAngleDeg = 35.0f; // degrees: texels in a cluster stay within this normal cone
-  int minTexels = 4;               // count: clusters are not split below this
-  float adaptiveScale = 1.0f;      // clusters stay within this × their texels' median
+  int minTexels = 1;               // count: clusters are not split below this
+  float adaptiveScale = 0.25f;     // clusters stay within this × their texels' median
                                    //   harmonic ray distance (<= 0: off)
   float maxDistanceRatio = 4.0f;   // texels whose ray distances differ by more are split
                                    //   apart (<= 1: off)
@@ -54,13 +56,12 @@ struct Clusters {
 };
 
 // Groups the valid texels into clusters: front sides first, then the back sides of
-// double-sided surfaces. The harmonic ray distances (per texel, from the gather, seen from the
-// front and from behind; may be empty) drive the adaptive subdivision; with a tracer, texels
-// that a wall separates from the rest of their cluster are split off. Deterministic.
+// double-sided surfaces. With a gather, its harmonic ray distances drive the adaptive
+// subdivision and only backs it saw get clusters (without one, every double-sided texel's
+// back does); with a tracer, texels that a wall separates from the rest of their cluster are
+// split off. Deterministic.
 Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
-                         const TexelSet& texels,
-                         const std::vector<float>& harmonicDistance = {},
-                         const std::vector<float>& backHarmonicDistance = {},
+                         const TexelSet& texels, const TexelGather* gather = nullptr,
                          const ClusterOptions& options = {});
 
 // The diffuse albedo the baker uses for a material at a UV (DESIGN.md: baseColor × (1 − metallic)

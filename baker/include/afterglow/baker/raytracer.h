@@ -116,8 +116,11 @@ class RayTracer {
   void intersect(const Ray* rays, Hit* hits, size_t count) const;
   void occluded(const Ray* rays, bool* blocked, size_t count) const;
 
-  // Rays traced so far by all threads (intersect and occluded), including measureRawThroughput.
+  enum class Query { Intersect, Occluded };
+  // Rays traced so far by all threads (intersect and occluded, or one kind), including
+  // measureRawThroughput.
   uint64_t raysTraced() const;
+  uint64_t raysTraced(Query query) const;
   void resetRayCount();
 
   // Surface attributes at a valid hit.
@@ -139,7 +142,6 @@ class RayTracer {
   // World bounds of everything in the BVH.
   scenes::Bounds bounds() const;
 
-  enum class Query { Intersect, Occluded };
   // Traces the rays on the calling thread with bare rtcIntersect1/rtcOccluded1 loops (no Hit
   // conversion, no counters) and returns rays per second, so a benchmark can compare the
   // wrapper's and the baker's throughput against Embree's raw one on the same rays.

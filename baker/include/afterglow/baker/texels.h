@@ -17,9 +17,10 @@ namespace afterglow::baker {
 class RayTracer;
 
 struct TexelOptions {
-  // Rays cast around each sample point to find geometry it sits inside or behind (tangent rays
-  // of 1.5 texels push it out; as many hemisphere rays mark it invalid when most of them see
-  // back faces of single-sided geometry).
+  // Tangent rays cast around each sample point, 1.5 texels long, to find geometry it sits
+  // behind (the nearest back face of single-sided geometry pushes it out to that surface's
+  // front) or that cuts through its footprint (TexelSet::nearGeometry). Whether a sample is
+  // buried inside geometry is decided later, by its gather rays (gatherTexels).
   int leakRays = 8;               // count
   // How far a sample is pushed off its surface (self-intersection epsilon), as a fraction of
   // the texel's world size, never below minOffset.
@@ -41,10 +42,12 @@ struct TexelSet {
   std::vector<uint16_t> atlas;       // atlas index
   std::vector<glm::u16vec2> pixel;   // texel coordinate in its atlas
   std::vector<float> offset;         // metres: how far position sits off the surface
-  std::vector<uint8_t> nearGeometry; // 1 when other geometry comes within 1.5 texels of the
+  std::vector<float> edge;           // metres: world length of a texel edge on its triangle
+  std::vector<uint8_t> nearGeometry; // 1 when other geometry comes within 0.75 texels of the
                                      //   sample along the surface (a wall or object may cut
                                      //   through the texel's footprint)
-  std::vector<uint8_t> valid;        // 0 when the texel is buried in geometry (no light)
+  std::vector<uint8_t> valid;        // 0 when the texel is buried in geometry (no light); set
+                                     //   by gatherTexels, all 1 after computeTexels
 
   uint32_t size() const { return uint32_t(position.size()); }
   // The sample point on the other side of the surface (for the back of double-sided
@@ -69,5 +72,9 @@ bool texelDoubleSided(const scenes::Scene& scene, const TexelSet& texels, uint32
 // to through TEXCOORD_1, or runtime::kNoTexel for dynamic instances and unbaked pixels.
 uint32_t texelAt(const scenes::Scene& scene, const TexelSet& texels, uint32_t instance,
                  uint32_t primitive, uint32_t triangle, glm::vec2 barycentric);
+// The same from the point's TEXCOORD_1 (RayTracer::uv(hit, 1) is cheaper than re-reading the
+// mesh, which matters for tens of millions of gather hits).
+uint32_t texelAtUv(const scenes::Scene& scene, const TexelSet& texels, uint32_t instance,
+                   glm::vec2 uv1);
 
 }  // namespace afterglow::baker

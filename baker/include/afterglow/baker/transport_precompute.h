@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "afterglow/baker/clusters.h"
+#include "afterglow/baker/gather.h"
 #include "afterglow/baker/texels.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
@@ -25,32 +26,23 @@ class RayTracer;
 
 struct LinkOptions {
   int texelRays = 64;          // cosine-distributed gather rays per texel
-  int clusterRays = 256;       // rays per back-side cluster of double-sided geometry
-  float minWeight = 1e-4f;     // links below this form factor are folded into the nearest kept one
+  int clusterRays = 256;       // rays per back-side cluster of double-sided geometry (fewer
+                               //   for small ones: at most texelRays per texel)
+  // Links below this form factor are left out and the rest of their row scaled up to keep its
+  // sum. 0 keeps every link: leaving links out trades accuracy (the dropped light is assumed
+  // to be the row's average) for a sparser matrix.
+  float minWeight = 0.0f;
   // A texel whose rays hit the back of single-sided geometry more often than this is inside a
   // wall: it is marked invalid and later filled from its neighbours.
   float maxBackfaceFraction = 0.1f;  // unitless
+  // A texel whose rays hit geometry nearer than its own size this often sits in a gap the
+  // lightmap cannot resolve (light changes within its footprint): it is marked invalid too.
+  float maxEnclosedFraction = 0.75f;  // unitless
   // Smoothing of the texels' bounced light (runtime::TransportData::texelNeighbours): passes of
   // a 3×3 tent over neighbours on the same surface that lie within filterReach × the harmonic
   // ray distance of both (so corners and contact shadows stay sharp). 0 passes: off.
   int filterPasses = 2;
   float filterReach = 0.5f;  // unitless
-};
-
-// What every texel's gather rays found.
-struct TexelGather {
-  // Hit codes: the texel whose surface a ray reached, with kBackSide set when it reached the
-  // back of a double-sided surface; kNoHit for misses (sky) and absorbed rays (backs of
-  // single-sided geometry, dynamic instances, surfaces without texels).
-  static constexpr uint32_t kBackSide = 0x80000000u;
-  static constexpr uint32_t kNoHit = 0xffffffffu;
-  uint32_t raysPerTexel = 0;
-  std::vector<uint32_t> hits;              // texel-major, raysPerTexel per texel
-  std::vector<float> sky;                  // texel-major, kShCount per texel: sky SH transfer
-  std::vector<float> harmonicDistance;     // metres: N / Σ 1/d over the rays (∞: open sky)
-  // The same seen from the back of double-sided surfaces (a quarter of the rays; empty
-  // entries, ∞, for single-sided ones), so their back sides cluster by their own surroundings.
-  std::vector<float> backHarmonicDistance;
 };
 
 // Traces every valid texel's gather rays, marks texels inside walls invalid (in `texels`), and
@@ -67,10 +59,13 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
                     Progress& progress = nullProgress());
 
 struct DirectOptions {
-  int lightSamples = 16;     // shadow rays per texel per light with a size (soft shadows)
-  int emissiveSamples = 64;  // samples per texel over all emissive triangles
-  int penumbraSamples = 256; // shadow rays per texel and light where the first ones disagree
-                             //   (the penumbra), so soft shadows come out smooth
+  // Shadow rays per texel and source: a first pass of lightSamples (lights with a size) or
+  // emissiveSamples (emissive surfaces), then penumbraSamples wherever the first pass's rays
+  // disagreed or disagreed with a neighbouring texel's (the penumbra and a texel around it),
+  // so soft shadows come out smooth without paying for them where the light is all or nothing.
+  int lightSamples = 16;
+  int emissiveSamples = 16;
+  int penumbraSamples = 128;
 };
 
 // One runtime::Source per light (unit colour and intensity) and per emissive material (unit

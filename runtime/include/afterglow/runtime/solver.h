@@ -10,6 +10,8 @@
 // results identical whatever the thread count.
 #pragma once
 
+#include <cstddef>
+#include <functional>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -23,9 +25,19 @@ struct SolveOptions {
   float tolerance = 1e-3f;        // stop when the largest relative change of R is below this
 };
 
+// Runs body(begin, end) over consecutive ranges covering [0, count), on as many threads as it
+// likes, and returns when every range is done. The solver splits its work into fixed blocks and
+// hands their indices to this, so results never depend on how the ranges are spread.
+using ParallelFor =
+    std::function<void(size_t count, const std::function<void(size_t begin, size_t end)>& body)>;
+
 class Solver {
  public:
   explicit Solver(const TransportData& data);
+
+  // How to spread a pass over threads (an engine's job system, the baker's pool); without one
+  // everything runs on the calling thread.
+  void setParallelFor(ParallelFor parallelFor) { parallelFor_ = std::move(parallelFor); }
 
   // Recomputes the per-cluster direct and sky terms and the albedos from the data's current
   // source, material and sky settings. Call after changing any of them.
@@ -49,7 +61,12 @@ class Solver {
   // Smooths bounced light over the texelNeighbours marks, indirectFilterPasses times.
   void filterIndirect(std::vector<glm::vec3>& indirect) const;
 
+  // body(first, last) over fixed blocks of `items` items, through parallelFor_ when set.
+  void forBlocks(size_t items, const std::function<void(size_t first, size_t last)>& body) const;
+
   const TransportData& data_;
+  ParallelFor parallelFor_;
+  mutable std::vector<float> blockChange_;  // iterate(): largest change per block
   // The indirect filter's neighbours as a sparse matrix (texel rows, tent weights that sum to
   // one), built once from the atlas layout and the marks.
   std::vector<uint32_t> filterStart_;

@@ -44,4 +44,15 @@ struct UnwrapResult {
 Result<UnwrapResult> unwrap(scenes::Scene& scene, const UnwrapOptions& options = {},
                             Progress& progress = nullProgress());
 
+// The texelsPerUnit that gives the static geometry about `texels` texels (its world area ×
+// lightmapScale², before charts and padding); 0 without static geometry. `afterglow bake`'s
+// default density, so a level in centimetres and a room in metres both bake in seconds.
+float texelsPerUnitFor(const scenes::Scene& scene, double texels);
+
+// The largest texelsPerUnit (to 1%) at which `generate` packs every static instance into one
+// atlas of at most atlasSize × atlasSize texels (`--atlas-size`: "give me a 256² lightmap").
+// Unwraps copies of the scene a dozen times, so it costs a dozen unwraps.
+Result<float> fitTexelsPerUnit(const scenes::Scene& scene, const UnwrapOptions& options,
+                               int atlasSize, Progress& progress = nullProgress());
+
 }  // namespace afterglow::uv

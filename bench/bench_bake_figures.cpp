@@ -1,0 +1,277 @@
+// afterglow_bench bake: the figures of the bake issue, in one run on this machine.
+//   1. The Cornell box (../shared/scenes/cornell_box_mcguire) unwrapped into one 256² atlas: the
+//      default bake's time (best of three), its error against the reference path tracer at a
+//      high sample count (direct and indirect apart), and a path-traced bake of the same texels
+//      at 256 paths per texel, the way a general renderer bakes: its time and its error.
+//   2. The precompute's rays per second against Embree's raw rtcIntersect1 / rtcOccluded1
+//      throughput on the same scene and the same kinds of rays (Cornell and Sponza-sun).
+//   3. Sponza-sun at 4 texels per metre: bake time, texels, peak memory.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "afterglow/baker/bake.h"
+#include "afterglow/baker/bake_output.h"
+#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/reference.h"
+#include "afterglow/core/parallel.h"
+#include "afterglow/uv/unwrap.h"
+#include "bench_common.h"
+#include "../baker/src/emitters.h"
+#include "../baker/src/sampling.h"
+
+namespace afterglow::bench {
+
+namespace {
+
+double stageSeconds(const baker::BakeResult& r, std::initializer_list<const char*> names) {
+  double total = 0.0;
+  for (const baker::StageTime& s : r.stages)
+    for (const char* n : names)
+      if (s.name == n) total += s.seconds;
+  return total;
+}
+
+// Rays per second of bare Embree calls over `rays`, spread over every thread; the best of
+// three passes (this machine's speed drifts by 10% over seconds; the bake gets its best of
+// two runs too).
+double rawThroughput(const baker::RayTracer& tracer, const std::vector<baker::Ray>& rays,
+                     baker::RayTracer::Query query) {
+  const size_t blocks = size_t(threadCount()) * 4;
+  double best = 0.0;
+  for (int pass = 0; pass < 3; ++pass) {
+    const auto start = Clock::now();
+    parallelFor(blocks, [&](size_t b) {
+      const size_t begin = rays.size() * b / blocks, end = rays.size() * (b + 1) / blocks;
+      tracer.measureRawThroughput(rays.data() + begin, end - begin, query);
+    }, 1);
+    best = std::max(best, double(rays.size()) / secondsSince(start));
+  }
+  return best;
+}
+
+// Gather-like rays (cosine-distributed from texels) and shadow-like rays (from texels toward
+// the first light, or toward points on the emissive surfaces) from every stride-th valid texel.
+void sampleRays(const scenes::Scene& scene, const baker::TexelSet& texels, size_t count,
+                std::vector<baker::Ray>& gather, std::vector<baker::Ray>& shadow) {
+  std::vector<uint32_t> valid;
+  for (uint32_t t = 0; t < texels.size(); ++t)
+    if (texels.valid[t]) valid.push_back(t);
+  if (valid.empty()) return;
+  const std::vector<baker::Emitter> emitters = baker::collectEmitters(scene);
+  const uint32_t perTexel = 64;
+  const size_t texelCount = std::max<size_t>(1, count / perTexel);
+  for (size_t i = 0; i < texelCount; ++i) {
+    const uint32_t t = valid[i * valid.size() / texelCount];
+    const baker::sampling::Frame frame(texels.normal[t]);
+    for (uint32_t s = 0; s < perTexel; ++s) {
+      baker::sampling::Rng rng(baker::sampling::Stream::TexelLinks, t, s);
+      baker::Ray ray;
+      ray.origin = texels.position[t];
+      ray.direction = frame.toWorld(baker::sampling::cosineHemisphere(
+          baker::sampling::stratified2(rng, s, perTexel)));
+      gather.push_back(ray);
+      baker::Ray sray;
+      sray.origin = texels.position[t];
+      sray.mask = baker::kMaskShadowCasters;
+      if (!scene.lights.empty() && scene.lights[0].type == scenes::LightType::Directional) {
+        sray.direction = -glm::normalize(scene.lights[0].direction);
+      } else if (!emitters.empty()) {
+        const baker::EmitterSample q = baker::sampleEmitter(emitters[0], rng.next2());
+        const glm::vec3 d = q.point - sray.origin;
+        sray.tfar = glm::length(d) * 0.999f;
+        sray.direction = d / std::max(glm::length(d), 1e-20f);
+      } else {
+        sray.direction = ray.direction;
+      }
+      shadow.push_back(sray);
+    }
+  }
+}
+
+struct Throughput {
+  double bakeRaysPerSecond = 0.0;
+  double rawRaysPerSecond = 0.0;  // for the bake's own mix of intersect and occluded rays
+};
+
+// The precompute's rays per second (texels, gather, clusters, links, direct) against what bare
+// Embree calls take for the same number of rays of each kind. `seconds` is the precompute's
+// best time over the runs made.
+Throughput compareThroughput(const scenes::Scene& scene, const baker::BakeResult& r,
+                             double seconds) {
+  Throughput out;
+  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  if (!tracer) return out;
+  std::vector<baker::Ray> gather, shadow;
+  sampleRays(scene, r.texels, 1 << 21, gather, shadow);
+  const double rawIntersect =
+      rawThroughput(*tracer.value(), gather, baker::RayTracer::Query::Intersect);
+  const double rawOccluded =
+      rawThroughput(*tracer.value(), shadow, baker::RayTracer::Query::Occluded);
+  const double intersect = double(r.raysIntersected), occluded = double(r.raysOccluded);
+  out.bakeRaysPerSecond = (intersect + occluded) / seconds;
+  out.rawRaysPerSecond = (intersect + occluded) / (intersect / rawIntersect + occluded / rawOccluded);
+  std::printf("  raw Embree   %.1f M intersect/s, %.1f M occluded/s (%d threads)\n",
+              rawIntersect / 1e6, rawOccluded / 1e6, threadCount());
+  std::printf("  precompute   %.1f M rays in %.2f s (%.0f%% occluded): %.1f M rays/s = %.0f%% of "
+              "raw Embree on the same mix   target >= 70%%: %s\n",
+              (intersect + occluded) / 1e6, seconds, 100.0 * occluded / (intersect + occluded),
+              out.bakeRaysPerSecond / 1e6, 100.0 * out.bakeRaysPerSecond / out.rawRaysPerSecond,
+              mark(out.bakeRaysPerSecond >= 0.7 * out.rawRaysPerSecond));
+  return out;
+}
+
+void printStages(const baker::BakeResult& r) {
+  for (const baker::StageTime& s : r.stages) std::printf(" %s %.3f", s.name.c_str(), s.seconds);
+}
+
+void printErrors(const char* name, const baker::ReferenceComparison& c) {
+  auto line = [&](const char* part, const baker::ErrorStats& e) {
+    std::printf("  %-10s %-9s relative RMSE %.2f%%  bias %+.2f%%  (reference noise <= %.2f%%)\n",
+                name, part, 100.0 * e.relativeRmse, 100.0 * e.bias, 100.0 * e.referenceNoise);
+  };
+  line("", c.direct);
+  line("", c.indirect);
+}
+
+int cornell(int threads) {
+  const std::string path =
+      std::string(AFTERGLOW_SHARED_DIR) + "/scenes/cornell_box_mcguire/CornellBox-Original.gltf";
+  Result<scenes::Scene> loaded = loadBenchScene(path);
+  if (!loaded) return fail(loaded.message());
+  scenes::Scene scene = std::move(loaded.value());
+  uv::UnwrapOptions unwrap;
+  Result<float> tpu = uv::fitTexelsPerUnit(scene, unwrap, 256);
+  if (!tpu) return fail(tpu.message());
+  unwrap.pack.texelsPerUnit = tpu.value();
+  unwrap.pack.maxAtlasSize = 256;
+  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
+  if (!unwrapped) return fail(unwrapped.message());
+
+  const baker::BakeOptions options;  // the default bake
+  double best = 1e30, bestPrecompute = 1e30;
+  Result<baker::BakeResult> baked = Status::error("not run");
+  for (int run = 0; run < 3; ++run) {
+    const auto start = Clock::now();
+    baked = baker::bake(scene, options);
+    best = std::min(best, secondsSince(start));
+    if (!baked) return fail(baked.message());
+    bestPrecompute = std::min(
+        bestPrecompute, stageSeconds(baked.value(), {"texels", "gather", "clusters", "links", "direct"}));
+  }
+  const baker::BakeResult& b = baked.value();
+  size_t valid = 0;
+  for (uint8_t v : b.texels.valid) valid += v;
+  std::printf("Cornell box   %s\n", path.c_str());
+  std::printf("  atlas        %dx%d at %.1f texels/m: %u texels (%zu valid), %u clusters, "
+              "%zu texel + %zu cluster links\n",
+              b.texels.atlases[0].width, b.texels.atlases[0].height, double(tpu.value()),
+              b.texels.size(), valid, b.clusters.size(), b.transport.texelLinks.size(),
+              b.transport.clusterLinks.size());
+  std::printf("  default bake %.3f s (best of 3, %d threads)   target <= 0.5 s: %s\n   ", best,
+              threads, mark(best <= 0.5));
+  printStages(b);
+  std::printf("\n");
+
+  // The reference at a high sample count over every 32nd valid texel.
+  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  if (!tracer) return fail(tracer.message());
+  std::vector<uint32_t> subset;
+  for (uint32_t t = 0, k = 0; t < b.texels.size(); ++t)
+    if (b.texels.valid[t] && k++ % 32 == 0) subset.push_back(t);
+  baker::Environment env;
+  baker::ReferenceOptions high;
+  high.samples = 65536;
+  auto start = Clock::now();
+  Result<baker::ReferenceTexels> ref =
+      baker::referenceTexels(scene, *tracer.value(), b.texels, env, high, subset);
+  if (!ref) return fail(ref.message());
+  std::printf("  reference    %zu texels x %d paths in %.1f s\n", subset.size(), high.samples,
+              secondsSince(start));
+  printErrors("bake", baker::compareToReference(ref.value(), b.texelDirect, b.texelIndirect));
+  std::printf("               targets: relative RMSE <= 3%%, |bias| <= 1%%, direct and indirect\n");
+
+  // A path-traced bake of every texel at 256 paths, as a general renderer bakes.
+  baker::BakeOptions pathTraced = options;
+  pathTraced.reference = true;
+  pathTraced.referenceOptions.samples = 256;
+  start = Clock::now();
+  Result<baker::BakeResult> pt = baker::bake(scene, pathTraced);
+  const double ptSeconds = secondsSince(start);
+  if (!pt) return fail(pt.message());
+  // The issue's yardstick: a general renderer path-traces this lightmap at 256 samples per
+  // texel in about 8 s on this kind of machine; afterglow's own path tracer is faster.
+  constexpr double kGeneralRendererSeconds = 8.0;
+  std::printf("  path-traced bake at 256 paths/texel: %.2f s here, ~%.0f s in a general renderer; "
+              "the default bake is %.1fx / %.1fx faster   target >= 20x: %s\n",
+              ptSeconds, kGeneralRendererSeconds, ptSeconds / best,
+              kGeneralRendererSeconds / best, mark(kGeneralRendererSeconds >= 20.0 * best));
+  printErrors("256 paths", baker::compareToReference(ref.value(), pt->texelDirect, pt->texelIndirect));
+  compareThroughput(scene, b, bestPrecompute);
+  return 0;
+}
+
+int sponza(int threads) {
+  const std::string path = std::string(AFTERGLOW_SHARED_DIR) + "/scenes/sponza/Sponza-sun.gltf";
+  const auto start = Clock::now();
+  Result<scenes::Scene> loaded = loadBenchScene(path);
+  if (!loaded) return fail(loaded.message());
+  scenes::Scene scene = std::move(loaded.value());
+  uv::UnwrapOptions unwrap;
+  unwrap.pack.texelsPerUnit = 4.0f;
+  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
+  if (!unwrapped) return fail(unwrapped.message());
+  Result<baker::BakeResult> baked = baker::bake(scene, baker::BakeOptions());
+  const double seconds = secondsSince(start);
+  if (!baked) return fail(baked.message());
+  const double peak = double(baker::peakMemoryBytes()) / 1e9;  // before anything else runs
+  const std::initializer_list<const char*> precompute = {"texels", "gather", "clusters", "links",
+                                                         "direct"};
+  double bestPrecompute = stageSeconds(baked.value(), precompute);
+  // A second, identical run (the bake is deterministic) for the throughput's best time, after
+  // the first is released.
+  baked = Status::error("released");
+  baked = baker::bake(scene, baker::BakeOptions());
+  if (!baked) return fail(baked.message());
+  bestPrecompute = std::min(bestPrecompute, stageSeconds(baked.value(), precompute));
+  const baker::BakeResult& b = baked.value();
+  size_t valid = 0;
+  for (uint8_t v : b.texels.valid) valid += v;
+  std::printf("Sponza-sun    %s at 4 texels/m, %d threads\n", path.c_str(), threads);
+  std::printf("  bake         %.1f s from load to lightmaps   target <= 60 s: %s\n   ", seconds,
+              mark(seconds <= 60.0));
+  printStages(b);
+  std::printf("\n  texels       %u (%zu valid), %u clusters, %zu texel + %zu cluster links\n",
+              b.texels.size(), valid, b.clusters.size(), b.transport.texelLinks.size(),
+              b.transport.clusterLinks.size());
+  std::printf("  peak memory  %.2f GB (whole process)   target <= 4 GB: %s\n", peak,
+              mark(peak <= 4.0));
+  compareThroughput(scene, b, bestPrecompute);
+  return 0;
+}
+
+}  // namespace
+
+int benchBake(int argc, char** argv) {
+  int threads = 2;
+  bool withSponza = true, withCornell = true;
+  for (int i = 2; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
+    else if (arg == "--cornell-only") withSponza = false;
+    else if (arg == "--sponza-only") withCornell = false;
+    else return fail("bake: unknown option " + arg + " (--threads N, --cornell-only, --sponza-only)");
+  }
+  setThreadCount(threads);
+  // Sponza first: its peak memory is the process's, and the Cornell box adds nothing to it.
+  if (withSponza)
+    if (int rc = sponza(threads)) return rc;
+  if (withCornell)
+    if (int rc = cornell(threads)) return rc;
+  return 0;
+}
+
+}  // namespace afterglow::bench
