@@ -16,6 +16,7 @@
 #include "afterglow/scenes/procedural.h"
 #include "afterglow/uv/unwrap.h"
 #include "../baker/src/lightmap_post.h"
+#include "afterglow/runtime/transport.h"
 #include "../baker/src/sky_image.h"
 #include "test_util.h"
 
@@ -252,19 +253,41 @@ TEST(SkyImage, ConstantSkyMatchesConstantShAndAGradientLandsInY1) {
   EXPECT_FALSE(projectEquirectSky(dir + "/missing.exr", sh));
 }
 
-TEST(LightmapPost, InvalidTexelsFillFromNeighboursThenChartsDilate) {
-  // 5×1 row: valid 1, invalid, valid 3, empty, empty.
-  std::vector<glm::vec3> image = {glm::vec3(1.0f), glm::vec3(100.0f), glm::vec3(3.0f),
-                                  glm::vec3(0.0f), glm::vec3(0.0f)};
-  std::vector<uint8_t> state = {kPixelValid, kPixelInvalid, kPixelValid, kPixelEmpty,
-                                kPixelEmpty};
-  EXPECT_EQ(fillInvalidPixels(5, 1, image, state), 1u);
-  EXPECT_FLOAT_EQ(image[1].x, 2.0f);
-  EXPECT_EQ(dilatePixels(5, 1, image, state, 1), 1u);
-  EXPECT_FLOAT_EQ(image[3].x, 3.0f);
-  EXPECT_EQ(state[4], kPixelEmpty);  // one ring only
-  EXPECT_EQ(dilatePixels(5, 1, image, state, 5), 1u);
-  EXPECT_FLOAT_EQ(image[4].x, 3.0f);
+// A 6×2 atlas: instance 0 owns columns 0-2 of row 0 (valid, invalid, valid), instance 1 owns
+// column 5 of row 0 (invalid, with no valid texel of its own); the rest is padding.
+TEST(LightmapPost, InvalidTexelsFillFromTheirInstanceThenChartsDilate) {
+  TexelSet texels;
+  runtime::AtlasLayout layout;
+  layout.width = 6;
+  layout.height = 2;
+  layout.texelOfPixel.assign(12, runtime::kNoTexel);
+  const uint32_t pixel[4] = {0, 1, 2, 5};
+  const uint32_t instance[4] = {0, 0, 0, 1};
+  const uint8_t valid[4] = {1, 0, 1, 0};
+  for (uint32_t t = 0; t < 4; ++t) {
+    layout.texelOfPixel[pixel[t]] = t;
+    texels.instance.push_back(instance[t]);
+    texels.valid.push_back(valid[t]);
+  }
+  texels.atlases.push_back(layout);
+  computeAtlasMixes(texels, 1);
+  const std::vector<glm::vec3> values = {glm::vec3(1.0f), glm::vec3(100.0f), glm::vec3(3.0f),
+                                         glm::vec3(50.0f)};
+  std::vector<glm::vec3> image;
+  runtime::resolveAtlas(texels.atlases[0], values, image);
+  ASSERT_EQ(image.size(), 12u);
+  EXPECT_FLOAT_EQ(image[0].x, 1.0f);
+  EXPECT_FLOAT_EQ(image[1].x, 2.0f);   // the invalid texel: mean of its valid neighbours
+  EXPECT_FLOAT_EQ(image[2].x, 3.0f);
+  EXPECT_FLOAT_EQ(image[3].x, 3.0f);   // padding, one ring deep, from the nearest chart
+  EXPECT_FLOAT_EQ(image[4].x, 0.0f);   // two rings away: left black
+  EXPECT_FLOAT_EQ(image[5].x, 0.0f);   // instance 1 has nothing valid to take light from
+  EXPECT_FLOAT_EQ(image[6].x, 1.5f);   // below pixels 0 and 1: mean of 1 and 2 (pixel 1's mix)
+  // Linear in the values: doubling them doubles every pixel.
+  std::vector<glm::vec3> doubled = values, twice;
+  for (glm::vec3& v : doubled) v *= 2.0f;
+  runtime::resolveAtlas(texels.atlases[0], doubled, twice);
+  for (size_t p = 0; p < image.size(); ++p) EXPECT_FLOAT_EQ(twice[p].x, 2.0f * image[p].x);
 }
 
 }  // namespace

@@ -208,30 +208,31 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
   if (cancelled()) return Status::error("cancelled");
 
   t0 = Clock::now();
-  const TexelSet& ts = result.texels;
-  progress.begin("dilate", ts.atlases.size());
-  size_t invalidLeft = 0;
-  for (const runtime::AtlasLayout& layout : ts.atlases) {
-    const size_t pixels = size_t(layout.width) * size_t(layout.height);
-    std::vector<glm::vec3> image(pixels, glm::vec3(0.0f));
-    std::vector<uint8_t> state(pixels, kPixelEmpty);
-    for (size_t p = 0; p < pixels && p < layout.texelOfPixel.size(); ++p) {
-      const uint32_t t = layout.texelOfPixel[p];
-      if (t == runtime::kNoTexel || t >= result.texelDirect.size()) continue;
-      image[p] = result.texelDirect[t] + result.texelIndirect[t];
-      state[p] = ts.valid.empty() || ts.valid[t] ? kPixelValid : kPixelInvalid;
+  progress.begin("dilate", 1);
+  computeAtlasMixes(result.texels, options.dilation);
+  {
+    // The transport carries the same atlas layouts, so the runtime resolves relit values alike.
+    std::vector<glm::vec3> values(result.texelDirect.size());
+    for (size_t t = 0; t < values.size(); ++t)
+      values[t] = result.texelDirect[t] + result.texelIndirect[t];
+    for (const runtime::AtlasLayout& layout : result.texels.atlases) {
+      result.lightmaps.emplace_back();
+      runtime::resolveAtlas(layout, values, result.lightmaps.back());
     }
-    fillInvalidPixels(layout.width, layout.height, image, state);
-    invalidLeft += size_t(std::count(state.begin(), state.end(), uint8_t(kPixelInvalid)));
-    dilatePixels(layout.width, layout.height, image, state, options.dilation);
-    result.lightmaps.push_back(std::move(image));
-    progress.advance();
+    if (!options.reference) result.transport.atlases = result.texels.atlases;
   }
+  progress.advance();
   progress.end();
   record("dilate", t0);
-  if (invalidLeft > 0)
+  // Texels no valid texel of their instance reaches (a wholly buried object) stay black.
+  size_t unreached = 0;
+  for (const runtime::AtlasLayout& layout : result.texels.atlases)
+    for (size_t i = 0; i + 1 < layout.mixStart.size(); ++i)
+      unreached += layout.mixStart[i] == layout.mixStart[i + 1];
+  if (unreached > 0)
     result.warnings.push_back(format(
-        "%zu invalid texels had no valid neighbour in their chart and stay black", invalidLeft));
+        "%zu invalid texels had no valid texel in their chart to take light from and stay black",
+        unreached));
   return result;
 }
 
