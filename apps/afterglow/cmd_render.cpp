@@ -1,4 +1,5 @@
-// afterglow render: a ray-traced picture of a baked scene (albedo × lightmap + emission).
+// afterglow render: a ray-traced picture of a baked scene (albedo × lightmap + emission), or
+// with --reference a path-traced picture of the same view to compare it with.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +24,10 @@ const char kRenderHelp[] =
     "with its diffuse albedo x its lightmap (the EXR files the bake wrote, found through the\n"
     "glTF's MOZ_lightmap materials) + its emission, then tone maps to an sRGB PNG. Surfaces\n"
     "without a lightmap (dynamic instances) show only their emission.\n"
+    "With --reference it path-traces the same view instead, to compare with: each visible\n"
+    "point is shaded the same way but with a path-traced estimate in place of its lightmap,\n"
+    "lit as the bake was (sky, sky image, indirect intensity and albedo boost from the\n"
+    "report.json beside SCENE.gltf; without one, a black sky and intensities 1).\n"
     "\n"
     "Options:\n"
     "  -o, --output VIEW.png    output picture; required\n"
@@ -33,7 +38,10 @@ const char kRenderHelp[] =
     "  --width N, --height N    picture size in pixels (default 640 x 480)\n"
     "  --exposure X             scale by 2^X before tone mapping (default: automatic, the\n"
     "                           99th percentile maps to 0.8)\n"
-    "  --threads N              worker threads (default: every core)\n"
+    "  --reference              path-trace the view instead of reading the lightmaps (slow)\n"
+    "  --spp N                  paths per pixel for --reference (default 256)\n"
+    "  --threads N              worker threads (default: every core); the picture is\n"
+    "                           identical for any count\n"
     "  --quiet                  no progress bar\n"
     "  -h, --help               this help\n";
 
@@ -55,6 +63,46 @@ bool parsePoint(const std::string& text, glm::vec3* out) {
   if (*p != '\0') return false;
   *out = glm::vec3(v[0], v[1], v[2]);
   return true;
+}
+
+// Whether any instance has a lightmap layout: the reference path-traces only what a bake lit,
+// so without one its picture would be black but for emission.
+bool hasLightmapLayout(const scenes::Scene& scene) {
+  for (const scenes::Instance& inst : scene.instances)
+    if (inst.isStatic && inst.lightmap.atlas >= 0) return true;
+  return false;
+}
+
+// What shades the picture: the bake's lighting for --reference, its lightmaps otherwise.
+// Loaded before the (slower) ray tracer so that bad inputs fail fast. Returns the exit code.
+int loadShading(const std::string& input, const scenes::Scene& scene, bool reference, bool quiet,
+                baker::Environment* environment, std::vector<baker::LightmapImage>* lightmaps) {
+  if (!reference) {
+    Result<std::vector<baker::LightmapImage>> loaded = baker::loadBakedLightmaps(input);
+    if (!loaded) {
+      printError(loaded.message());
+      return kExitBadInput;
+    }
+    *lightmaps = std::move(loaded.value());
+    return kExitOk;
+  }
+  if (!hasLightmapLayout(scene)) {
+    printError(input + ": no instance has a lightmap (extras.afterglow.lightmap), so the "
+               "reference would show emission only; render the scene.gltf afterglow bake wrote");
+    return kExitBadInput;
+  }
+  bool reportFound = false;
+  Result<baker::Environment> loaded = baker::loadBakeEnvironment(input, &reportFound);
+  if (!loaded) {
+    printError(loaded.message());
+    return kExitBadInput;
+  }
+  *environment = loaded.value();
+  if (!reportFound && !quiet)
+    std::printf("note          no report.json beside %s: lighting the reference with a black "
+                "sky, indirect intensity 1 and albedo boost 1\n",
+                input.c_str());
+  return kExitOk;
 }
 
 bool endsWith(const std::string& s, const std::string& suffix) {
@@ -79,6 +127,8 @@ int runRender(int argc, char** argv, int first) {
                    {"height"},
                    {"exposure"},
                    {"threads"},
+                   {"reference", 0, false},
+                   {"spp"},
                    {"quiet", 0, false},
                    {"help", 'h', false}}))
     return usage(args.error());
@@ -93,12 +143,14 @@ int runRender(int argc, char** argv, int first) {
   if (!endsWith(output, ".png")) return usage("the output must end in .png, got '" + output + "'");
   baker::RenderOptions options;
   int threads = 0;
+  int spp = 256;
   float fovDeg = 45.0f;
   float exposure = std::numeric_limits<float>::quiet_NaN();
   if (!args.getInt("width", 640, 1, 16384, &options.width) ||
       !args.getInt("height", 480, 1, 16384, &options.height) ||
       !args.getFloat("fov", 45.0f, 0.0f, 179.0f, &fovDeg) ||
-      !args.getInt("threads", 0, 0, 1024, &threads))
+      !args.getInt("threads", 0, 0, 1024, &threads) ||
+      !args.getInt("spp", 256, 1, 1 << 20, &spp))
     return usage(args.error());
   if (args.has("exposure") && !args.getFloat("exposure", 0.0f, -100.0f, 100.0f, &exposure))
     return usage(args.error());
@@ -125,11 +177,13 @@ int runRender(int argc, char** argv, int first) {
     return badArgument ? kExitUsage : kExitBadInput;
   }
   const scenes::Scene& scene = loaded.value();
-  Result<std::vector<baker::LightmapImage>> lightmaps = baker::loadBakedLightmaps(input);
-  if (!lightmaps) {
-    printError(lightmaps.message());
-    return kExitBadInput;
-  }
+  const bool reference = args.has("reference");
+  const bool quiet = args.has("quiet");
+  baker::Environment environment;
+  std::vector<baker::LightmapImage> lightmaps;
+  if (int code = loadShading(input, scene, reference, quiet, &environment, &lightmaps);
+      code != kExitOk)
+    return code;
 
   const float fovRad = fovDeg * 3.14159265f / 180.0f;
   baker::View view;
@@ -162,7 +216,9 @@ int runRender(int argc, char** argv, int first) {
     return kExitBadInput;
   }
   Result<std::vector<glm::vec3>> image =
-      baker::renderBaked(scene, *tracer.value(), lightmaps.value(), view, options, progress);
+      reference ? baker::renderReference(scene, *tracer.value(), environment, view, options, spp,
+                                         progress)
+                : baker::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress);
   if (interrupted() || progress.cancelled()) {
     printError("interrupted; nothing written");
     return kExitInterrupted;
@@ -177,8 +233,13 @@ int runRender(int argc, char** argv, int first) {
     printError(st.message());
     return kExitOutput;
   }
-  if (!args.has("quiet")) std::printf("wrote         %s (%dx%d)\n", output.c_str(), options.width,
-                                      options.height);
+  if (!quiet) {
+    const std::string how =
+        reference ? format("reference: path traced, %d paths per pixel", spp)
+                  : std::string("baked: albedo x lightmap + emission");
+    std::printf("wrote         %s (%dx%d, %s)\n", output.c_str(), options.width, options.height,
+                how.c_str());
+  }
   return kExitOk;
 }
 

@@ -12,6 +12,10 @@
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/baker/bake_output.h"
+#include "afterglow/runtime/solver.h"
+#include "path_tracer.h"
+#include "sampling.h"
+#include "sky_image.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -54,6 +58,107 @@ glm::vec3 fetch(const LightmapImage& lm, glm::vec2 uv) {
   const int x0 = int(fx), y0 = int(fy);
   return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), tx),
                   glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), tx), ty);
+}
+
+// Primary rays of a pinhole view, shared by both renders so that the baked and the reference
+// picture see exactly the same geometry through the same pixels.
+class PinholeCamera {
+ public:
+  PinholeCamera(const View& view, int width, int height)
+      : view_(view),
+        right_(glm::normalize(glm::cross(view.forward, view.up))),
+        tanHalf_(std::tan(view.yfov * 0.5f)),
+        aspect_(float(width) / float(height)),
+        width_(float(width)),
+        height_(float(height)) {}
+
+  // The ray through picture point (x, y), in pixels from the top-left corner.
+  Ray ray(float x, float y) const {
+    const float cx = (2.0f * (x / width_) - 1.0f) * tanHalf_ * aspect_;
+    const float cy = (1.0f - 2.0f * (y / height_)) * tanHalf_;
+    Ray r;
+    r.origin = view_.position;
+    r.direction = glm::normalize(view_.forward + cx * right_ + cy * view_.up);
+    return r;
+  }
+
+ private:
+  View view_;
+  glm::vec3 right_;
+  float tanHalf_, aspect_, width_, height_;
+};
+
+// Fills a picture with shade(camera, px, py), row 0 at the top: rows in parallel (one row per
+// task, so progress moves per row), stopping between pixels once progress is cancelled (a
+// reference row at many samples per pixel takes a while).
+template <class Shade>
+Result<std::vector<glm::vec3>> renderPixels(const View& view, const RenderOptions& options,
+                                            const char* stage, Progress& progress,
+                                            const Shade& shade) {
+  const int w = options.width, h = options.height;
+  if (w <= 0 || h <= 0) return Status::error("render: the image size must be positive");
+  const PinholeCamera camera(view, w, h);
+  std::vector<glm::vec3> image(size_t(w) * size_t(h), glm::vec3(0.0f));
+  progress.begin(stage, size_t(h));
+  parallelFor(size_t(h), [&](size_t row) {
+    for (int px = 0; px < w; ++px) {
+      if (progress.cancelled()) return;
+      image[row * size_t(w) + size_t(px)] = shade(camera, px, int(row));
+    }
+    progress.advance();
+  }, 1);
+  progress.end();
+  if (progress.cancelled()) return Status::error("cancelled");
+  return image;
+}
+
+// What the baked render shows along one primary ray: diffuse albedo × lightmap + emission.
+// Back faces of single-sided geometry and misses are black; surfaces without a lightmap
+// (dynamic instances) show only their emission.
+glm::vec3 bakedRadiance(const scenes::Scene& scene, const RayTracer& tracer,
+                        const std::vector<LightmapImage>& lightmaps, const Ray& ray) {
+  const Hit hit = tracer.intersect(ray);
+  if (!hit.valid()) return glm::vec3(0.0f);
+  const scenes::Instance& inst = scene.instances[hit.instance];
+  const int material = scene.meshes[size_t(inst.mesh)].primitives[hit.primitive].material;
+  const scenes::Material& mat = scene.material(material);
+  if (!hit.frontFace && !mat.doubleSided) return glm::vec3(0.0f);
+  const glm::vec2 uv0 = tracer.uv(hit, 0);
+  glm::vec3 light(0.0f);
+  const int atlas = inst.lightmap.atlas;
+  if (atlas >= 0 && size_t(atlas) < lightmaps.size() && lightmaps[size_t(atlas)].width > 0)
+    light = fetch(lightmaps[size_t(atlas)], tracer.uv(hit, 1));
+  glm::vec3 radiance = diffuseAlbedo(scene, material, uv0) * light;
+  if (hit.frontFace) radiance += emittedRadiance(scene, material, uv0);
+  return radiance;
+}
+
+// Copies report settings[key], a number (count 1) or an array of `count` numbers, into out;
+// an absent key keeps the default (reports of older bakes). The error names the report.
+Status readNumbers(const json& settings, const char* key, float* out, int count,
+                   const std::string& report) {
+  if (!settings.contains(key)) return Status::ok();
+  const json& v = settings[key];
+  const bool ok = count == 1 ? v.is_number()
+                             : v.is_array() && v.size() == size_t(count) &&
+                                   std::all_of(v.begin(), v.end(),
+                                               [](const json& x) { return x.is_number(); });
+  if (!ok)
+    return Status::error(report + ": settings." + key +
+                         (count == 1 ? " is not a number" : format(" is not %d numbers", count)));
+  for (int i = 0; i < count; ++i) out[i] = (count == 1 ? v : v[size_t(i)]).get<float>();
+  return Status::ok();
+}
+
+// A relative skyImage is relative to the folder the bake ran in, which the report does not
+// record: use it as written when it exists from here (rendering from where one baked), else
+// beside the report, where a moved output folder may have taken it along.
+std::string resolveSkyImage(const std::string& recorded, const fs::path& reportDir) {
+  const fs::path path(recorded);
+  std::error_code ec;
+  if (path.is_absolute() || fs::exists(path, ec)) return recorded;
+  const fs::path beside = reportDir / path;
+  return fs::exists(beside, ec) ? beside.string() : recorded;
 }
 
 }  // namespace
@@ -134,51 +239,76 @@ Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const Ray
                                            const std::vector<LightmapImage>& lightmaps,
                                            const View& view, const RenderOptions& options,
                                            Progress& progress) {
-  const int w = options.width, h = options.height;
-  if (w <= 0 || h <= 0) return Status::error("render: the image size must be positive");
   const int spa = std::max(1, options.samplesPerAxis);
-  const glm::vec3 right = glm::normalize(glm::cross(view.forward, view.up));
-  const float tanHalf = std::tan(view.yfov * 0.5f);
-  const float aspect = float(w) / float(h);
-  std::vector<glm::vec3> image(size_t(w) * size_t(h), glm::vec3(0.0f));
-  progress.begin("render", size_t(h));
-  parallelFor(size_t(h), [&](size_t row) {
-    if (progress.cancelled()) return;
-    const int py = int(row);
-    for (int px = 0; px < w; ++px) {
-      glm::vec3 sum(0.0f);
-      for (int sy = 0; sy < spa; ++sy) {
-        for (int sx = 0; sx < spa; ++sx) {
-          const float fx = (float(px) + (float(sx) + 0.5f) / float(spa)) / float(w);
-          const float fy = (float(py) + (float(sy) + 0.5f) / float(spa)) / float(h);
-          const float cx = (2.0f * fx - 1.0f) * tanHalf * aspect;
-          const float cy = (1.0f - 2.0f * fy) * tanHalf;
-          Ray ray;
-          ray.origin = view.position;
-          ray.direction = glm::normalize(view.forward + cx * right + cy * view.up);
-          const Hit hit = tracer.intersect(ray);
-          if (!hit.valid()) continue;
-          const scenes::Instance& inst = scene.instances[hit.instance];
-          const int material = scene.meshes[size_t(inst.mesh)].primitives[hit.primitive].material;
-          const scenes::Material& mat = scene.material(material);
-          const bool visibleSide = hit.frontFace || mat.doubleSided;
-          if (!visibleSide) continue;
-          const glm::vec2 uv0 = tracer.uv(hit, 0);
-          glm::vec3 light(0.0f);
-          const int atlas = inst.lightmap.atlas;
-          if (atlas >= 0 && size_t(atlas) < lightmaps.size() && lightmaps[size_t(atlas)].width > 0)
-            light = fetch(lightmaps[size_t(atlas)], tracer.uv(hit, 1));
-          sum += diffuseAlbedo(scene, material, uv0) * light;
-          if (hit.frontFace) sum += emittedRadiance(scene, material, uv0);
-        }
-      }
-      image[size_t(py) * size_t(w) + size_t(px)] = sum / float(spa * spa);
+  return renderPixels(view, options, "render", progress,
+                      [&](const PinholeCamera& camera, int px, int py) {
+    // A fixed grid: the picture of a bake has no noise of its own.
+    glm::vec3 sum(0.0f);
+    for (int sy = 0; sy < spa; ++sy)
+      for (int sx = 0; sx < spa; ++sx)
+        sum += bakedRadiance(scene, tracer, lightmaps,
+                             camera.ray(float(px) + (float(sx) + 0.5f) / float(spa),
+                                        float(py) + (float(sy) + 0.5f) / float(spa)));
+    return sum / float(spa * spa);
+  });
+}
+
+Result<std::vector<glm::vec3>> renderReference(const scenes::Scene& scene,
+                                               const RayTracer& tracer,
+                                               const Environment& environment, const View& view,
+                                               const RenderOptions& options, int samplesPerPixel,
+                                               Progress& progress) {
+  if (samplesPerPixel <= 0) return Status::error("render: samples per pixel must be positive");
+  const PathTracer pathTracer(scene, tracer, environment, ReferenceOptions().maxDepth);
+  const uint32_t spp = uint32_t(samplesPerPixel);
+  return renderPixels(view, options, "reference render", progress,
+                      [&](const PinholeCamera& camera, int px, int py) {
+    const uint64_t pixel = uint64_t(py) * uint64_t(options.width) + uint64_t(px);
+    glm::dvec3 sum(0.0);  // doubles: up to 2^20 samples of very different sizes
+    for (uint32_t s = 0; s < spp; ++s) {
+      // Seeded from (pixel, sample) alone, so no thread's schedule changes a path. The pixel
+      // position is stratified; the first bounce direction is uniform, independent of it.
+      sampling::Rng rng(sampling::Stream::ReferenceView, pixel, s);
+      const glm::vec2 jitter = sampling::stratified2(rng, s, spp);
+      const Ray ray = camera.ray(float(px) + jitter.x, float(py) + jitter.y);
+      const glm::vec2 u = rng.next2();
+      sum += glm::dvec3(pathTracer.cameraRadiance(ray, u, rng));
     }
-    progress.advance();
-  }, 1);
-  progress.end();
-  if (progress.cancelled()) return Status::error("cancelled");
-  return image;
+    return glm::vec3(sum / double(spp));
+  });
+}
+
+Result<Environment> loadBakeEnvironment(const std::string& gltfPath, bool* reportFound) {
+  Environment env;  // a black sky, intensities 1: what a bake without options uses
+  if (reportFound) *reportFound = false;
+  std::error_code ec;
+  // A built-in scene (builtin:...) is no file and has no report beside it.
+  if (!fs::is_regular_file(gltfPath, ec)) return env;
+  const fs::path reportPath = fs::path(gltfPath).parent_path() / "report.json";
+  if (!fs::is_regular_file(reportPath, ec)) return env;
+  const std::string report = reportPath.string();
+  Result<std::string> text = readFile(report);
+  if (!text) return text.status();
+  const json doc = json::parse(text.value(), nullptr, false);
+  if (doc.is_discarded() || !doc.is_object()) return Status::error(report + ": not valid JSON");
+  const json settings = doc.value("settings", json::object());
+  if (!settings.is_object()) return Status::error(report + ": \"settings\" is not an object");
+  glm::vec3 sky(0.0f);
+  if (Status s = readNumbers(settings, "indirectIntensity", &env.indirectIntensity, 1, report); !s)
+    return s;
+  if (Status s = readNumbers(settings, "albedoBoost", &env.albedoBoost, 1, report); !s) return s;
+  if (Status s = readNumbers(settings, "sky", &sky[0], 3, report); !s) return s;
+  const json image = settings.value("skyImage", json(""));
+  if (!image.is_string())
+    return Status::error(report + ": settings.skyImage is not a string");
+  if (const std::string recorded = image.get<std::string>(); !recorded.empty()) {
+    Status s = projectEquirectSky(resolveSkyImage(recorded, reportPath.parent_path()), env.skySh);
+    if (!s) return Status::error(report + ": settings.skyImage: " + s.message());
+  } else {
+    runtime::constantSkySh(sky, env.skySh);
+  }
+  if (reportFound) *reportFound = true;
+  return env;
 }
 
 Status writeRenderPng(const std::string& path, int width, int height,

@@ -2,6 +2,8 @@
 // pixel traces primary rays (a fixed 2×2 grid, deterministic) and shades the first hit with
 // diffuse albedo × lightmap (bilinear at TEXCOORD_1) + emission; misses and dynamic instances
 // (no lightmap) get no light. The output is linear HDR; tone mapping happens on write.
+// `afterglow render --reference` path-traces the same view, shaded the same way but with the
+// lightmap replaced by a path-traced E/π at each first hit, to compare against the bake.
 #pragma once
 
 #include <string>
@@ -9,6 +11,7 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/baker/reference.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
 #include "afterglow/scenes/scene.h"
@@ -55,6 +58,26 @@ Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const Ray
                                            const std::vector<LightmapImage>& lightmaps,
                                            const View& view, const RenderOptions& options = {},
                                            Progress& progress = nullProgress());
+
+// The same view path-traced (reference.h): every pixel averages `samplesPerPixel` camera rays
+// through stratified jittered points of the pixel, each shaded as a bake is rendered (emission +
+// diffuse albedo × one path's E/π at the first hit, with the given sky and intensities), so it
+// differs from renderBaked only by the bake's error and its own noise. Deterministic whatever
+// the thread count: every sample is seeded from (pixel, sample). options.samplesPerAxis is
+// not used.
+Result<std::vector<glm::vec3>> renderReference(const scenes::Scene& scene,
+                                               const RayTracer& tracer,
+                                               const Environment& environment, const View& view,
+                                               const RenderOptions& options, int samplesPerPixel,
+                                               Progress& progress = nullProgress());
+
+// The lighting a bake used besides the scene's lights and emissive materials: the sky
+// (settings.sky, or settings.skyImage projected to SH) and settings.indirectIntensity and
+// albedoBoost from the report.json `afterglow bake` wrote beside `gltfPath`. Without a report,
+// a black sky and intensities 1, with *reportFound (when given) set false. A relative skyImage
+// is read from the working directory as the bake did, or else from beside the report (a moved
+// output folder). Errors (unreadable report or sky image) name the file.
+Result<Environment> loadBakeEnvironment(const std::string& gltfPath, bool* reportFound = nullptr);
 
 // Writes a tone-mapped sRGB PNG atomically. exposureStops NaN = automatic (the 99th percentile
 // maps to 0.8 after the tone curve); otherwise the image is scaled by 2^exposureStops.
