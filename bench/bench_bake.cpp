@@ -3,6 +3,7 @@
 // precompute (afterglow_bench bake prints the figures with the default settings).
 //   afterglow_bench accuracy [SCENE] [--texels-per-unit N | --atlas-size N] [--spp N]
 //       [--stride N] [--threads N] [--quality draft|default|high] [--texel-rays N]
+//       [--near-rays N] [--near-distance X]
 //       [--cluster-size M] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
 //       [--filter-passes N] [--filter-reach X] [--min-weight W] [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]]
@@ -79,6 +80,8 @@ int benchAccuracy(int argc, char** argv) {
                                   : q == "high" ? baker::Quality::High
                                                 : baker::Quality::Default);
     } else if (arg == "--texel-rays") options.links.texelRays = int(next());
+    else if (arg == "--near-rays") options.links.nearRays = int(next());
+    else if (arg == "--near-distance") options.links.nearDistance = float(next());
     else if (arg == "--cluster-size") options.clusters.clusterSize = float(next());
     else if (arg == "--adaptive-scale") options.clusters.adaptiveScale = float(next());
     else if (arg == "--distance-ratio") options.clusters.maxDistanceRatio = float(next());
@@ -121,6 +124,8 @@ int benchAccuracy(int argc, char** argv) {
   std::printf("bake         %.3f s (", bakeSeconds);
   for (const baker::StageTime& s : b.stages) std::printf(" %s %.3f", s.name.c_str(), s.seconds);
   std::printf(" )\n");
+  std::printf("rays         %.2f M intersect, %.2f M occluded\n", double(b.raysIntersected) / 1e6,
+              double(b.raysOccluded) / 1e6);
   if (spp <= 0) return 0;
 
   Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);

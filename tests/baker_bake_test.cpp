@@ -270,7 +270,9 @@ TEST(LightmapPost, InvalidTexelsFillFromTheirInstanceThenChartsDilate) {
     texels.valid.push_back(valid[t]);
   }
   texels.atlases.push_back(layout);
-  computeAtlasMixes(texels, 1);
+  PostOptions post;
+  post.dilation = 1;
+  computeAtlasMixes(texels, scenes::Scene{}, post);
   const std::vector<glm::vec3> values = {glm::vec3(1.0f), glm::vec3(100.0f), glm::vec3(3.0f),
                                          glm::vec3(50.0f)};
   std::vector<glm::vec3> image;

@@ -209,7 +209,9 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
 
   t0 = Clock::now();
   progress.begin("dilate", 1);
-  computeAtlasMixes(result.texels, options.dilation);
+  PostOptions post;
+  post.dilation = options.dilation;
+  computeAtlasMixes(result.texels, scene, post);
   {
     // The transport carries the same atlas layouts, so the runtime resolves relit values alike.
     std::vector<glm::vec3> values(result.texelDirect.size());

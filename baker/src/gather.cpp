@@ -52,7 +52,8 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   TexelGather g;
   const uint32_t rays = uint32_t(options.texelRays);
   g.raysPerTexel = rays;
-  g.hits.assign(size_t(count) * rays, TexelGather::kNoHit);
+  std::vector<uint32_t> first(size_t(count) * rays, TexelGather::kNoHit);  // the first pass's hits
+  std::vector<double> inverseDistance(count, 0.0);  // Σ 1/t over the texel's rays so far
   g.sky.assign(size_t(count) * kShCount, 0.0f);
   g.harmonicDistance.assign(count, std::numeric_limits<float>::infinity());
   g.backHarmonicDistance.assign(count, std::numeric_limits<float>::infinity());
@@ -63,6 +64,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   progress.begin("gather rays", count);
   // Texels go in groups of 16 per batch (1024 rays by default).
   constexpr size_t kTexelsPerBatch = 16;
+  const sampling::InterleavedGrid grid(rays);
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     GatherBatch batch;
     std::vector<uint32_t> batchTexels;
@@ -76,7 +78,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         sampling::Rng rng(sampling::Stream::TexelLinks, t, 0);  // one sequence per texel
         for (uint32_t s = 0; s < rays; ++s)
           batch.add(texels.position[t], frame, texels.geometricNormal[t],
-                    sampling::interleaved2(rng, s, rays, texels.pixel[t].x, texels.pixel[t].y));
+                    grid.point(rng, s, texels.pixel[t].x, texels.pixel[t].y));
       }
       batch.trace(tracer, texels, &lookup);
       for (size_t i = 0; i < batchTexels.size(); ++i) {
@@ -91,15 +93,79 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
           buried[t] = 1;
           continue;
         }
-        std::copy_n(batch.codes().begin() + long(i * rays), rays, g.hits.begin() + long(size_t(t) * rays));
-        for (int k = 0; k < kShCount; ++k) g.sky[size_t(t) * kShCount + size_t(k)] = float(sum.sky[k] / rays);
-        if (sum.inverseDistance > 0.0) g.harmonicDistance[t] = float(double(rays) / sum.inverseDistance);
+        std::copy_n(batch.codes().begin() + long(i * rays), rays, first.begin() + long(size_t(t) * rays));
+        for (int k = 0; k < kShCount; ++k) g.sky[size_t(t) * kShCount + size_t(k)] = float(sum.sky[k]);
+        inverseDistance[t] = sum.inverseDistance;
       }
     }
     progress.advance(end - begin);
   }, 4096);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
+
+  // A second pass for texels near other geometry (the first pass's harmonic distance under
+  // nearDistance texel edges), with a stratified set of its own.
+  const uint32_t more = uint32_t(std::max(0, options.nearRays));
+  std::vector<uint32_t> extra(count, 0);
+  for (uint32_t t = 0; t < count; ++t)
+    if (texels.valid[t] && !buried[t] && more > 0 &&
+        double(rays) < inverseDistance[t] * double(options.nearDistance * texels.edge[t]))
+      extra[t] = more;
+  std::vector<uint32_t> extraStart(size_t(count) + 1, 0);
+  for (uint32_t t = 0; t < count; ++t) extraStart[t + 1] = extraStart[t] + extra[t];
+  std::vector<uint32_t> second(extraStart[count], TexelGather::kNoHit);
+  progress.begin("gather rays (near geometry)", count);
+  parallelForBlocks(count, [&](size_t begin, size_t end, int) {
+    GatherBatch batch;
+    std::vector<uint32_t> batchTexels;
+    const size_t perBatch = std::max<size_t>(1, 1024 / std::max<uint32_t>(1, more));
+    for (size_t t = begin; t < end && !progress.cancelled();) {
+      batch.clear();
+      batchTexels.clear();
+      for (; t < end && batchTexels.size() < perBatch; ++t) {
+        if (!extra[t]) continue;
+        batchTexels.push_back(uint32_t(t));
+        const sampling::Frame frame(texels.normal[t]);
+        sampling::Rng rng(sampling::Stream::TexelLinks, t, 1);
+        for (uint32_t s = 0; s < more; ++s)
+          batch.add(texels.position[t], frame, texels.geometricNormal[t],
+                    sampling::stratified2(rng, s, more));
+      }
+      if (batchTexels.empty()) break;
+      batch.trace(tracer, texels, &lookup);
+      for (size_t i = 0; i < batchTexels.size(); ++i) {
+        const uint32_t u = batchTexels[i];
+        const GatherBatch::Summary sum = batch.summarize(tracer, i * more, (i + 1) * more);
+        std::copy_n(batch.codes().begin() + long(i * more), more,
+                    second.begin() + long(extraStart[u]));
+        for (int k = 0; k < kShCount; ++k) g.sky[size_t(u) * kShCount + size_t(k)] += float(sum.sky[k]);
+        inverseDistance[u] += sum.inverseDistance;
+      }
+    }
+    progress.advance(end - begin);
+  }, 4096);
+  progress.end();
+  if (progress.cancelled()) return Status::error("cancelled");
+
+  // Every texel's rays in one list; sky and distance as means over all of them.
+  g.hitStart.assign(size_t(count) + 1, 0);
+  for (uint32_t t = 0; t < count; ++t)
+    g.hitStart[t + 1] = g.hitStart[t] + (buried[t] || !texels.valid[t] ? 0 : rays + extra[t]);
+  g.hits.resize(g.hitStart[count]);
+  for (uint32_t t = 0; t < count; ++t) {
+    if (g.hitStart[t + 1] == g.hitStart[t]) {
+      std::fill_n(&g.sky[size_t(t) * kShCount], kShCount, 0.0f);
+      continue;
+    }
+    std::copy_n(first.begin() + long(size_t(t) * rays), rays, g.hits.begin() + long(g.hitStart[t]));
+    std::copy_n(second.begin() + long(extraStart[t]), extra[t],
+                g.hits.begin() + long(g.hitStart[t] + rays));
+    const float n = float(rays + extra[t]);
+    for (int k = 0; k < kShCount; ++k) g.sky[size_t(t) * kShCount + size_t(k)] /= n;
+    if (inverseDistance[t] > 0.0) g.harmonicDistance[t] = float(double(n) / inverseDistance[t]);
+  }
+  std::vector<uint32_t>().swap(first);
+  std::vector<uint32_t>().swap(second);
 
   // Invalidate buried texels; rays that landed on one stand on a valid neighbour instead (or
   // are absorbed when none is near).
@@ -117,8 +183,6 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
       const uint32_t s = standIn[t];
       code = s == kNoTexel ? TexelGather::kNoHit : (s | (code & TexelGather::kBackSide));
     }
-    for (uint32_t t = 0; t < count; ++t)
-      if (buried[t]) std::fill_n(g.hits.begin() + long(size_t(t) * rays), rays, TexelGather::kNoHit);
   }
   // The backs some ray reached, and how far their own rays go (for their clusters).
   g.backSeen.assign(count, 0);

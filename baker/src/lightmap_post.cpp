@@ -1,7 +1,10 @@
 #include "lightmap_post.h"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
+
+#include "seams.h"
 
 namespace afterglow::baker {
 
@@ -10,32 +13,33 @@ namespace {
 using runtime::kNoTexel;
 using runtime::kNeighbourOffsets;
 
-// A pixel's value as texel weights while the mixes grow.
-using Mix = std::vector<std::pair<uint32_t, float>>;
+using Mix = PixelMix;
 
-// The average of neighbour mixes, merged by texel, trimmed to the kMaxMix strongest entries.
+// The average of neighbour mixes, trimmed to the kMaxMix strongest entries.
 Mix averageOf(const std::vector<const Mix*>& parts) {
-  Mix merged;
-  for (const Mix* part : parts)
-    for (const auto& [texel, weight] : *part) merged.push_back({texel, weight / float(parts.size())});
-  std::sort(merged.begin(), merged.end());
-  Mix out;
-  for (const auto& e : merged) {
-    if (!out.empty() && out.back().first == e.first) out.back().second += e.second;
-    else out.push_back(e);
-  }
-  if (out.size() > kMaxMix) {
-    // Strongest first (ties by texel, so the choice does not depend on anything else).
-    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
-      return a.second != b.second ? a.second > b.second : a.first < b.first;
-    });
-    out.resize(kMaxMix);
-    float sum = 0.0f;
-    for (const auto& e : out) sum += e.second;
-    for (auto& e : out) e.second /= sum;
-    std::sort(out.begin(), out.end());
-  }
-  return out;
+  std::vector<std::pair<const Mix*, float>> scaled;
+  for (const Mix* part : parts) scaled.push_back({part, 1.0f / float(parts.size())});
+  return combineMixes(scaled, kMaxMix);
+}
+
+// Keeps the `cap` entries largest in magnitude of a texel-sorted mix; see combineMixes.
+void trimMix(Mix& mix, size_t cap) {
+  if (mix.size() <= cap) return;
+  float total = 0.0f;
+  for (const auto& e : mix) total += e.second;
+  // Strongest first (ties by texel, so the choice does not depend on anything else).
+  std::sort(mix.begin(), mix.end(), [](const auto& a, const auto& b) {
+    const float wa = std::abs(a.second), wb = std::abs(b.second);
+    return wa != wb ? wa > wb : a.first < b.first;
+  });
+  mix.resize(cap);
+  float kept = 0.0f, magnitude = 0.0f;
+  for (const auto& e : mix) kept += e.second, magnitude += std::abs(e.second);
+  // Spread by magnitude rather than scaling by total/kept: stitched mixes may hold negative
+  // weights, and their kept sum can be near zero.
+  if (magnitude > 0.0f)
+    for (auto& e : mix) e.second += (total - kept) * std::abs(e.second) / magnitude;
+  std::sort(mix.begin(), mix.end());
 }
 
 // Grows mixes ring by ring into the pixels `open` allows: each pixel reached in a ring
@@ -86,10 +90,51 @@ void grow(int width, int height, std::vector<Mix>& mix, std::vector<uint8_t>& ha
   }
 }
 
+// Whether a pixel can go without a mix: it holds a valid texel and takes exactly that texel's
+// value (a stitched pixel mixes in others).
+bool copiesTexel(const Mix& mix, uint32_t own, const TexelSet& texels) {
+  return own != kNoTexel && texels.valid[own] && mix.size() == 1 && mix[0].first == own &&
+         mix[0].second == 1.0f;
+}
+
 }  // namespace
 
-void computeAtlasMixes(TexelSet& texels, int dilation) {
-  for (runtime::AtlasLayout& layout : texels.atlases) {
+Mix combineMixes(const std::vector<std::pair<const Mix*, float>>& parts, size_t cap) {
+  // Every mix is sorted by texel, so each part merges in one pass (no sort: stitching combines
+  // millions of mixes).
+  Mix out, merged;
+  for (const auto& [part, scale] : parts) {
+    merged.clear();
+    auto a = out.begin();
+    auto b = part->begin();
+    while (a != out.end() || b != part->end()) {
+      if (b == part->end() || (a != out.end() && a->first < b->first)) {
+        merged.push_back(*a++);
+      } else if (a == out.end() || b->first < a->first) {
+        merged.push_back({b->first, b->second * scale});
+        ++b;
+      } else {
+        merged.push_back({a->first, a->second + b->second * scale});
+        ++a, ++b;
+      }
+    }
+    out.swap(merged);
+  }
+  // Exact cancellations add nothing to any pixel; dropping them keeps mixes small.
+  out.erase(std::remove_if(out.begin(), out.end(), [](const auto& e) { return e.second == 0.0f; }),
+            out.end());
+  trimMix(out, cap);
+  return out;
+}
+
+PostStats computeAtlasMixes(TexelSet& texels, const scenes::Scene& scene,
+                            const PostOptions& options) {
+  PostStats stats;
+  const std::vector<std::vector<Seam>> seams =
+      options.stitchSeams ? findSeams(scene, texels.atlases, options.stitchMaxAngleDeg)
+                          : std::vector<std::vector<Seam>>(texels.atlases.size());
+  for (size_t a = 0; a < texels.atlases.size(); ++a) {
+    runtime::AtlasLayout& layout = texels.atlases[a];
     const int w = layout.width, h = layout.height;
     const size_t pixels = size_t(w) * size_t(h);
     std::vector<Mix> mix(pixels);
@@ -114,7 +159,9 @@ void computeAtlasMixes(TexelSet& texels, int dilation) {
     });
     // Padding, `dilation` pixels deep, from whatever chart is nearest.
     for (size_t p = 0; p < pixels; ++p) open[p] = layout.texelOfPixel[p] == kNoTexel;
-    grow(w, h, mix, has, open, dilation, [](size_t, size_t) { return true; });
+    grow(w, h, mix, has, open, options.dilation, [](size_t, size_t) { return true; });
+    // Last, so that seam footprints reaching into the padding read dilated pixels.
+    stitchSeams(seams[a], w, h, options, mix, has, stats);
 
     layout.mixPixel.clear();
     layout.mixStart.assign(1, 0);
@@ -122,7 +169,7 @@ void computeAtlasMixes(TexelSet& texels, int dilation) {
     layout.mixWeight.clear();
     for (size_t p = 0; p < pixels; ++p) {
       const uint32_t own = layout.texelOfPixel[p];
-      if (own != kNoTexel && texels.valid[own]) continue;  // copies its texel
+      if (copiesTexel(mix[p], own, texels)) continue;
       // An invalid texel nothing reached gets an empty mix: black, not its untrusted value.
       if (!has[p] && own == kNoTexel) continue;
       layout.mixPixel.push_back(uint32_t(p));
@@ -133,6 +180,7 @@ void computeAtlasMixes(TexelSet& texels, int dilation) {
       layout.mixStart.push_back(uint32_t(layout.mixTexel.size()));
     }
   }
+  return stats;
 }
 
 }  // namespace afterglow::baker

@@ -233,11 +233,11 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   if (options.clusterRays <= 0) return Status::error("computeLinks: clusterRays must be positive");
   const uint32_t texelCount = texels.size();
   const uint32_t clusterCount = clusters.size();
-  const uint32_t rays = gather.raysPerTexel;
+  const uint32_t rays = gather.raysPerTexel;  // back clusters cast as many per texel
   if (clusters.texelCluster.size() != texelCount)
     return Status::error(format("computeLinks: clusters cover %zu texels, the texel set has %u",
                                 clusters.texelCluster.size(), texelCount));
-  if (gather.hits.size() != size_t(texelCount) * rays ||
+  if (gather.hitStart.size() != size_t(texelCount) + 1 ||
       gather.sky.size() != size_t(texelCount) * kShCount)
     return Status::error("computeLinks: the gather does not match the texel set");
   if (clusterCount > 0 && clusters.firstTexel.size() != size_t(clusterCount) + 1)
@@ -257,18 +257,20 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   // Texel rows: what each texel's own rays reached, counted per cluster (a sort of a few dozen
   // cluster indices; no dense accumulator needed).
   transport.texelSky.assign(size_t(texelCount) * kShCount, 0.0f);
-  const float perRay = rays > 0 ? 1.0f / float(rays) : 0.0f;
+
   progress.begin("form factors (texels)", texelCount);
   buildRows(
       texelCount, progress, [] { return std::vector<uint32_t>(); },
       [&](size_t t, std::vector<uint32_t>& targets, std::vector<Link>& row) {
         if (!texels.valid[t]) return;
         targets.clear();
-        const uint32_t* codes = &gather.hits[t * rays];
-        for (uint32_t k = 0; k < rays; ++k) {
-          const uint32_t c = clusterOf(codes[k]);
+        const uint32_t firstHit = gather.hitStart[t], lastHit = gather.hitStart[t + 1];
+        if (firstHit == lastHit) return;
+        for (uint32_t k = firstHit; k < lastHit; ++k) {
+          const uint32_t c = clusterOf(gather.hits[k]);
           if (c != kNoTexel) targets.push_back(c);
         }
+        const float perRay = 1.0f / float(lastHit - firstHit);
         std::sort(targets.begin(), targets.end());
         for (size_t k = 0; k < targets.size();) {
           size_t e = k + 1;

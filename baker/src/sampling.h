@@ -71,16 +71,20 @@ inline glm::vec2 stratified2(Rng& rng, uint32_t index, uint32_t count) {
 // set four times as fine, so the smoothing of bounced light over neighbours (which averages
 // such blocks) loses far more noise than with independent patterns. Alone, each texel's
 // pattern is still one point per cell.
-inline glm::vec2 interleaved2(Rng& rng, uint32_t index, uint32_t count, uint32_t px,
-                              uint32_t py) {
-  uint32_t gy = uint32_t(std::sqrt(double(count)));
-  while (gy > 1 && count % gy != 0) --gy;
-  const uint32_t gx = count / gy;
-  const glm::vec2 u = rng.next2();
-  const float cx = float(index % gx) + 0.5f * (float(px & 1u) + u.x);
-  const float cy = float((index / gx) % gy) + 0.5f * (float(py & 1u) + u.y);
-  return {cx / float(gx), cy / float(gy)};
-}
+struct InterleavedGrid {
+  uint32_t gx = 1, gy = 1;
+  explicit InterleavedGrid(uint32_t count) {
+    gy = uint32_t(std::sqrt(double(count)));
+    while (gy > 1 && count % gy != 0) --gy;
+    gx = std::max(1u, count / gy);
+  }
+  glm::vec2 point(Rng& rng, uint32_t index, uint32_t px, uint32_t py) const {
+    const glm::vec2 u = rng.next2();
+    const float cx = float(index % gx) + 0.5f * (float(px & 1u) + u.x);
+    const float cy = float((index / gx) % gy) + 0.5f * (float(py & 1u) + u.y);
+    return {cx / float(gx), cy / float(gy)};
+  }
+};
 
 // cos and sin of 2π·t for t in [0, 1): a minimax polynomial on an octant (|error| < 4e-7, as
 // good as float sinf), five times cheaper than sincosf; sampling calls it for every ray.

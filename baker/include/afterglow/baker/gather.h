@@ -13,8 +13,11 @@ struct TexelGather {
   // single-sided geometry, dynamic instances, surfaces without texels).
   static constexpr uint32_t kBackSide = 0x80000000u;
   static constexpr uint32_t kNoHit = 0xffffffffu;
-  uint32_t raysPerTexel = 0;
-  std::vector<uint32_t> hits;              // texel-major, raysPerTexel per texel
+  uint32_t raysPerTexel = 0;               // the first pass's rays per texel
+  // Texel t's rays are hits[hitStart[t] .. hitStart[t+1]): raysPerTexel, plus more for texels
+  // near other geometry (LinkOptions::nearRays), none for invalid texels.
+  std::vector<uint32_t> hitStart;
+  std::vector<uint32_t> hits;
   std::vector<float> sky;                  // texel-major, kShCount per texel: sky SH transfer
   std::vector<float> harmonicDistance;     // metres: N / Σ 1/d over the rays (∞: open sky)
   // Texels whose back side some ray reached (double-sided surfaces seen from behind): only

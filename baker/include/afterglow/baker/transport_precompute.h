@@ -26,6 +26,11 @@ class RayTracer;
 
 struct LinkOptions {
   int texelRays = 64;          // cosine-distributed gather rays per texel
+  // Texels close to other geometry (harmonic ray distance under nearDistance texel edges: the
+  // corners of a room, the floor along a box) see light that changes fast over short
+  // distances, which 64 rays resolve poorly; they cast nearRays more.
+  int nearRays = 192;
+  float nearDistance = 2.0f;   // texel edges
   int clusterRays = 256;       // rays per back-side cluster of double-sided geometry (fewer
                                //   for small ones: at most texelRays per texel)
   // Links below this form factor are left out and the rest of their row scaled up to keep its
