@@ -151,7 +151,8 @@ Status gatherAndLink(const Scene& scene, const RayTracer& tracer, TexelSet& texe
 
 float rowSum(const runtime::SparseLinks& links, size_t row) {
   float sum = 0.0f;
-  for (uint32_t k = links.rowStart[row]; k < links.rowStart[row + 1]; ++k) sum += links.weight[k];
+  for (uint32_t k = links.rowStart[row]; k < links.rowStart[row + 1]; ++k)
+    sum += links.weightAt(row, k);
   return sum;
 }
 
@@ -195,7 +196,7 @@ TEST(BakerTransport, ParallelSquaresFormFactorsRowsAndReciprocity) {
       const uint32_t c = data.texelLinks.target[k];
       // Flat squares never see themselves.
       EXPECT_EQ(c >= 4, t < texelsA) << "texel " << t << " links cluster " << c;
-      if (t < texelsA) fab += double(b.texels.area[t]) * data.texelLinks.weight[k];
+      if (t < texelsA) fab += double(b.texels.area[t]) * data.texelLinks.weightAt(t, k);
     }
     if (t < texelsA) areaA += b.texels.area[t];
   }
@@ -209,7 +210,7 @@ TEST(BakerTransport, ParallelSquaresFormFactorsRowsAndReciprocity) {
     const float miss = data.clusterSky[size_t(c) * runtime::kShCount] / kY00;
     EXPECT_NEAR(rowSum(data.clusterLinks, c) + miss, 1.0f, 1e-4f);
     for (uint32_t k = data.clusterLinks.rowStart[c]; k < data.clusterLinks.rowStart[c + 1]; ++k)
-      f[c][data.clusterLinks.target[k]] = data.clusterLinks.weight[k];
+      f[c][data.clusterLinks.target[k]] = data.clusterLinks.weightAt(c, k);
   }
   double clusterFab = 0.0;
   for (uint32_t i = 0; i < 4; ++i) {
@@ -264,7 +265,9 @@ TEST(BakerTransport, LinksAndDirectAreIndependentOfThreadCount) {
   EXPECT_EQ(one.texelLinks.rowStart, two.texelLinks.rowStart);
   EXPECT_EQ(one.texelLinks.target, two.texelLinks.target);
   EXPECT_EQ(one.texelLinks.weight, two.texelLinks.weight);
+  EXPECT_EQ(one.texelLinks.rowScale, two.texelLinks.rowScale);
   EXPECT_EQ(one.clusterLinks.weight, two.clusterLinks.weight);
+  EXPECT_EQ(one.clusterLinks.rowScale, two.clusterLinks.rowScale);
   EXPECT_EQ(one.texelSky, two.texelSky);
   EXPECT_GT(one.texelLinks.size(), 0u);
 }

@@ -26,14 +26,11 @@ TransportData makeFurnace(uint32_t n, float rho, float le) {
   emit.clusterTransfer.assign(n, 1.0f);
   d.sources.push_back(emit);
   auto fill = [n](SparseLinks& links, uint32_t rows) {
-    links.rowStart.assign(1, 0);
-    for (uint32_t r = 0; r < rows; ++r) {
-      for (uint32_t c = 0; c < n; ++c) {
-        links.target.push_back(c);
-        links.weight.push_back(1.0f / float(n));
-      }
-      links.rowStart.push_back(uint32_t(links.target.size()));
-    }
+    links = SparseLinks();
+    std::vector<uint32_t> targets(n);
+    std::vector<float> weights(n, 1.0f / float(n));
+    for (uint32_t c = 0; c < n; ++c) targets[c] = c;
+    for (uint32_t r = 0; r < rows; ++r) links.appendRow(targets.data(), weights.data(), n);
   };
   fill(d.clusterLinks, n);
   fill(d.texelLinks, d.texelCount);
@@ -71,7 +68,7 @@ TEST(RuntimeSolver, FixedBounceCountGivesPartialGeometricSeries) {
 TEST(RuntimeSolver, ConstantSkyOnUnoccludedTexelEqualsSkyRadiance) {
   TransportData d;
   d.texelCount = 1;
-  d.texelLinks.rowStart = {0, 0};
+  d.texelLinks.appendRow(nullptr, nullptr, 0);  // one texel that sees no cluster
   // Transfer of an unoccluded, upward-facing point: only the DC term matters for a constant sky.
   d.texelSky.assign(kShCount, 0.0f);
   d.texelSky[0] = 1.0f / (2.0f * std::sqrt(3.14159265358979f));

@@ -112,16 +112,21 @@ void buildRows(size_t rows, Progress& progress, MakeState&& makeState, Fill&& fi
   size_t total = 0;
   for (const Block& b : blocks) total += b.links.size();
   out.rowStart.reserve(rows + 1);
+  out.rowScale.reserve(rows);
   out.target.reserve(total);
   out.weight.reserve(total);
+  std::vector<uint32_t> targets;
+  std::vector<float> weights;
   for (Block& b : blocks) {
     size_t k = 0;
     for (uint32_t length : b.lengths) {
+      targets.clear();
+      weights.clear();
       for (uint32_t i = 0; i < length; ++i, ++k) {
-        out.target.push_back(b.links[k].cluster);
-        out.weight.push_back(b.links[k].weight);
+        targets.push_back(b.links[k].cluster);
+        weights.push_back(b.links[k].weight);
       }
-      out.rowStart.push_back(uint32_t(out.target.size()));
+      out.appendRow(targets.data(), weights.data(), length);
     }
     std::vector<Link>().swap(b.links);
   }
@@ -303,7 +308,7 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
       const uint32_t t = clusters.memberTexels[k];
       const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
       for (uint32_t i = tl.rowStart[t]; i < tl.rowStart[t + 1]; ++i)
-        row.add(tl.target[i], share * double(tl.weight[i]));
+        row.add(tl.target[i], share * double(tl.weightAt(t, i)));
       for (int i = 0; i < kShCount; ++i)
         sky[i] += float(share * double(gather.sky[size_t(t) * kShCount + size_t(i)]));
     }

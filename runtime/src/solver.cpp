@@ -124,7 +124,8 @@ float Solver::iterate() {
     for (size_t c = first; c < last; ++c) {
       glm::vec3 gathered(0.0f);
       for (uint32_t k = links.rowStart[c]; k < links.rowStart[c + 1]; ++k)
-        gathered += links.weight[k] * reflected_[links.target[k]];
+        gathered += float(links.weight[k]) * reflected_[links.target[k]];
+      gathered *= links.rowScale[c];
       glm::vec3 r = albedo_[c] * (clusterDirect_[c] + gathered);
       glm::vec3 diff = glm::abs(r - reflected_[c]);
       float mag = std::max({r.x, r.y, r.z});
@@ -169,8 +170,8 @@ void Solver::gatherTexels(std::vector<glm::vec3>& direct, std::vector<glm::vec3>
     for (size_t t = first; t < last; ++t) {
       glm::vec3 sum(0.0f);
       for (uint32_t k = links.rowStart[t]; k < links.rowStart[t + 1]; ++k)
-        sum += links.weight[k] * reflected_[links.target[k]];
-      indirect[t] = data_.indirectIntensity * sum;
+        sum += float(links.weight[k]) * reflected_[links.target[k]];
+      indirect[t] = data_.indirectIntensity * links.rowScale[t] * sum;
       glm::vec3 d = hasSky ? evalSky(data_.skySh, &data_.texelSky[t * kShCount]) : glm::vec3(0.0f);
       for (size_t i = 0; i < scales.size(); ++i)
         if (!data_.sources[i].texelTransfer.empty()) d += scales[i] * data_.sources[i].texelTransfer[t];

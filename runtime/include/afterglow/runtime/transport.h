@@ -24,16 +24,23 @@ constexpr uint32_t kNoTexel = 0xffffffffu;
 constexpr int kNeighbourOffsets[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0},
                                          {1, 0},   {-1, 1}, {0, 1},  {1, 1}};
 
-// Row-compressed sparse matrix: row r links to target[k] with weight[k] for k in
-// [rowStart[r], rowStart[r+1]). Weights are form factors: the fraction of a point's
-// cosine-weighted hemisphere that sees the target cluster.
+// Row-compressed sparse matrix of form factors, stored quantised: row r links to target[k] with
+// weight[k] × rowScale[r] for k in [rowStart[r], rowStart[r+1]), targets ascending. A weight is
+// the fraction of a point's cosine-weighted hemisphere that sees the target cluster; 16 bits
+// against the row's largest weight keep it within 1/65535 of that largest (a row gathers
+// `scale × Σ weight[k] R[target[k]]`, one multiply per row), at 6 bytes a link.
 struct SparseLinks {
   std::vector<uint32_t> rowStart{0};
   std::vector<uint32_t> target;
-  std::vector<float> weight;
+  std::vector<uint16_t> weight;
+  std::vector<float> rowScale;
 
   size_t rows() const { return rowStart.size() - 1; }
   size_t size() const { return target.size(); }
+  float weightAt(size_t row, size_t k) const { return float(weight[k]) * rowScale[row]; }
+  // Appends a row: n (target, form factor) pairs with ascending targets. Weights that round
+  // to zero against the row's largest are left out.
+  void appendRow(const uint32_t* targets, const float* weights, size_t n);
 };
 
 // A source of direct light whose unit transfer was precomputed: a punctual light, or all the

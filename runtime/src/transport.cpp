@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cmath>
 
 #include "afterglow/runtime/transport.h"
 
@@ -22,6 +23,20 @@ void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texel
         sum += layout.mixWeight[k] * texelValues[layout.mixTexel[k]];
     image[p] = sum;
   }
+}
+
+void SparseLinks::appendRow(const uint32_t* targets, const float* weights, size_t n) {
+  float largest = 0.0f;
+  for (size_t i = 0; i < n; ++i) largest = std::max(largest, weights[i]);
+  const float scale = largest > 0.0f ? largest / 65535.0f : 0.0f;
+  rowScale.push_back(scale);
+  for (size_t i = 0; i < n && scale > 0.0f; ++i) {
+    const float q = std::round(weights[i] / scale);
+    if (!(q >= 1.0f)) continue;
+    target.push_back(targets[i]);
+    weight.push_back(uint16_t(std::min(q, 65535.0f)));
+  }
+  rowStart.push_back(uint32_t(target.size()));
 }
 
 }  // namespace afterglow::runtime
