@@ -11,8 +11,8 @@ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release
 cmake --build "$build" --parallel "$(nproc)" --target afterglow
 
 echo
-echo "setup: afterglow uv builtin:cornell -o out/cornell/cornell.gltf"
-"$build/apps/afterglow" uv builtin:cornell -o out/cornell/cornell.gltf
+echo "setup: afterglow bake builtin:cornell -o out/cornell"
+"$build/apps/afterglow" bake builtin:cornell -o out/cornell
 echo
-echo "setup: afterglow info out/cornell/cornell.gltf"
-"$build/apps/afterglow" info out/cornell/cornell.gltf
+echo "setup: afterglow render out/cornell/scene.gltf -o out/cornell/view.png"
+"$build/apps/afterglow" render out/cornell/scene.gltf -o out/cornell/view.png

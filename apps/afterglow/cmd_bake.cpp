@@ -363,7 +363,10 @@ int runBake(int argc, char** argv, int first) {
                              {"indirectIntensity", options.indirectIntensity},
                              {"albedoBoost", options.albedoBoost},
                              {"sky", {options.skyColor.r, options.skyColor.g, options.skyColor.b}},
-                             {"skyImage", options.skyImage},
+                             // Absolute, so `render --reference` finds it from anywhere.
+                             {"skyImage", options.skyImage.empty()
+                                              ? std::string()
+                                              : fs::absolute(options.skyImage).string()},
                              {"clusterSize", options.clusters.clusterSize},
                              {"dilation", options.dilation},
                              {"threads", threadCount()},
