@@ -150,10 +150,9 @@ class GatherBatch {
     glm::vec3 dir = frame.toWorld(sampling::cosineHemisphere(u));
     const float below = glm::dot(dir, geometricNormal);
     if (below < 0.0f) dir = glm::normalize(dir - 2.0f * below * geometricNormal);
-    Ray ray;
+    Ray& ray = rays_.emplace_back();  // in place: a copy of a fresh Ray stalls store forwarding
     ray.origin = origin;
     ray.direction = dir;
-    rays_.push_back(ray);
   }
 
   // Traces the rays queued since the last trace(); with `lookup`, also finds the texel each

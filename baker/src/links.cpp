@@ -83,24 +83,31 @@ class RowBuilder {
 template <class MakeState, class Fill>
 void buildRows(size_t rows, Progress& progress, MakeState&& makeState, Fill&& fill,
                runtime::SparseLinks& out, size_t grain) {
+  // A block's rows, already quantised (SparseLinks of its own, joined below).
   struct Block {
     size_t begin = 0;
-    std::vector<uint32_t> lengths;
-    std::vector<Link> links;
+    runtime::SparseLinks links;
   };
   std::vector<Block> blocks;
   std::mutex mutex;
   parallelForBlocks(rows, [&](size_t begin, size_t end, int) {
     Block block;
     block.begin = begin;
-    block.lengths.reserve(end - begin);
+    block.links.rowScale.reserve(end - begin);
     auto state = makeState();
     std::vector<Link> row;
+    std::vector<uint32_t> targets;
+    std::vector<float> weights;
     for (size_t r = begin; r < end; ++r) {
       row.clear();
       if (!progress.cancelled()) fill(r, state, row);
-      block.lengths.push_back(uint32_t(row.size()));
-      block.links.insert(block.links.end(), row.begin(), row.end());
+      targets.clear();
+      weights.clear();
+      for (const Link& l : row) {
+        targets.push_back(l.cluster);
+        weights.push_back(l.weight);
+      }
+      block.links.appendRow(targets.data(), weights.data(), row.size());
     }
     progress.advance(end - begin);
     std::lock_guard<std::mutex> lock(mutex);
@@ -115,20 +122,14 @@ void buildRows(size_t rows, Progress& progress, MakeState&& makeState, Fill&& fi
   out.rowScale.reserve(rows);
   out.target.reserve(total);
   out.weight.reserve(total);
-  std::vector<uint32_t> targets;
-  std::vector<float> weights;
   for (Block& b : blocks) {
-    size_t k = 0;
-    for (uint32_t length : b.lengths) {
-      targets.clear();
-      weights.clear();
-      for (uint32_t i = 0; i < length; ++i, ++k) {
-        targets.push_back(b.links[k].cluster);
-        weights.push_back(b.links[k].weight);
-      }
-      out.appendRow(targets.data(), weights.data(), length);
-    }
-    std::vector<Link>().swap(b.links);
+    const uint32_t base = uint32_t(out.target.size());
+    out.target.insert(out.target.end(), b.links.target.begin(), b.links.target.end());
+    out.weight.insert(out.weight.end(), b.links.weight.begin(), b.links.weight.end());
+    out.rowScale.insert(out.rowScale.end(), b.links.rowScale.begin(), b.links.rowScale.end());
+    for (size_t r = 1; r < b.links.rowStart.size(); ++r)
+      out.rowStart.push_back(base + b.links.rowStart[r]);
+    b.links = runtime::SparseLinks();
   }
 }
 
@@ -259,30 +260,32 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     const uint32_t t = code & ~TexelGather::kBackSide;
     return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
   };
-  // Texel rows: what each texel's own rays reached, counted per cluster (a sort of a few dozen
-  // cluster indices; no dense accumulator needed).
+  // Texel rows: what each texel's own rays reached, counted per cluster in a dense array (one
+  // per block of rows; only the few dozen clusters a row touches are sorted).
   transport.texelSky.assign(size_t(texelCount) * kShCount, 0.0f);
-
+  struct Counter {
+    std::vector<uint16_t> count;
+    std::vector<uint32_t> touched;
+  };
   progress.begin("form factors (texels)", texelCount);
   buildRows(
-      texelCount, progress, [] { return std::vector<uint32_t>(); },
-      [&](size_t t, std::vector<uint32_t>& targets, std::vector<Link>& row) {
+      texelCount, progress, [&] { return Counter{std::vector<uint16_t>(clusterCount, 0), {}}; },
+      [&](size_t t, Counter& counter, std::vector<Link>& row) {
         if (!texels.valid[t]) return;
-        targets.clear();
         const uint32_t firstHit = gather.hitStart[t], lastHit = gather.hitStart[t + 1];
         if (firstHit == lastHit) return;
         for (uint32_t k = firstHit; k < lastHit; ++k) {
           const uint32_t c = clusterOf(gather.hits[k]);
-          if (c != kNoTexel) targets.push_back(c);
+          if (c == kNoTexel) continue;
+          if (counter.count[c]++ == 0) counter.touched.push_back(c);
         }
         const float perRay = 1.0f / float(lastHit - firstHit);
-        std::sort(targets.begin(), targets.end());
-        for (size_t k = 0; k < targets.size();) {
-          size_t e = k + 1;
-          while (e < targets.size() && targets[e] == targets[k]) ++e;
-          row.push_back({targets[k], float(e - k) * perRay});
-          k = e;
+        std::sort(counter.touched.begin(), counter.touched.end());
+        for (uint32_t c : counter.touched) {
+          row.push_back({c, float(counter.count[c]) * perRay});
+          counter.count[c] = 0;
         }
+        counter.touched.clear();
         dropWeakLinks(options.minWeight, row);
         std::copy_n(&gather.sky[t * kShCount], kShCount, &transport.texelSky[t * kShCount]);
       },
