@@ -3,8 +3,8 @@
 // precompute (afterglow_bench bake prints the figures with the default settings).
 //   afterglow_bench accuracy [SCENE] [--texels-per-unit N | --atlas-size N] [--spp N]
 //       [--stride N] [--threads N] [--quality draft|default|high] [--texel-rays N]
-//       [--near-rays N] [--near-distance X]
-//       [--cluster-size M] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
+//       [--near-rays N] [--near-distance X] [--near-field X] [--block-distance X]
+//       [--cluster-size M] [--cluster-texels N] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
 //       [--filter-passes N] [--filter-reach X] [--min-weight W] [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]]
 // SCENE defaults to the Cornell box of ../shared/scenes; --spp 0 only times the bake.
@@ -82,7 +82,10 @@ int benchAccuracy(int argc, char** argv) {
     } else if (arg == "--texel-rays") options.links.texelRays = int(next());
     else if (arg == "--near-rays") options.links.nearRays = int(next());
     else if (arg == "--near-distance") options.links.nearDistance = float(next());
+    else if (arg == "--near-field") options.links.nearField = float(next());
+    else if (arg == "--block-distance") options.links.blockDistance = float(next());
     else if (arg == "--cluster-size") options.clusters.clusterSize = float(next());
+    else if (arg == "--cluster-texels") options.clusters.clusterTexels = float(next());
     else if (arg == "--adaptive-scale") options.clusters.adaptiveScale = float(next());
     else if (arg == "--distance-ratio") options.clusters.maxDistanceRatio = float(next());
     else if (arg == "--min-texels") options.clusters.minTexels = int(next());
@@ -116,11 +119,13 @@ int benchAccuracy(int argc, char** argv) {
   if (!baked) return fail(baked.message());
   const baker::BakeResult& b = baked.value();
   std::printf("scene        %s\n", scenePath.c_str());
-  std::printf("atlas        %dx%d at %.1f texels/m, %u texels, %u clusters, %zu texel links, "
-              "%zu cluster links\n",
+  size_t valid = 0;
+  for (uint8_t v : b.texels.valid) valid += v;
+  std::printf("atlas        %dx%d at %.1f texels/m, %u texels (%zu valid), %u gather points, "
+              "%u clusters, %zu links\n",
               b.texels.atlases[0].width, b.texels.atlases[0].height,
-              double(unwrapOptions.pack.texelsPerUnit), b.texels.size(), b.clusters.size(),
-              b.transport.texelLinks.size(), b.transport.clusterLinks.size());
+              double(unwrapOptions.pack.texelsPerUnit), b.texels.size(), valid,
+              b.transport.gatherPointCount, b.clusters.size(), b.transport.links.size());
   std::printf("bake         %.3f s (", bakeSeconds);
   for (const baker::StageTime& s : b.stages) std::printf(" %s %.3f", s.name.c_str(), s.seconds);
   std::printf(" )\n");

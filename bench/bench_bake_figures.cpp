@@ -166,11 +166,11 @@ int cornell(int threads) {
   size_t valid = 0;
   for (uint8_t v : b.texels.valid) valid += v;
   std::printf("Cornell box   %s\n", path.c_str());
-  std::printf("  atlas        %dx%d at %.1f texels/m: %u texels (%zu valid), %u clusters, "
-              "%zu texel + %zu cluster links\n",
+  std::printf("  atlas        %dx%d at %.1f texels/m: %u texels (%zu valid), %u gather points, "
+              "%u clusters, %zu links\n",
               b.texels.atlases[0].width, b.texels.atlases[0].height, double(tpu.value()),
-              b.texels.size(), valid, b.clusters.size(), b.transport.texelLinks.size(),
-              b.transport.clusterLinks.size());
+              b.texels.size(), valid, b.transport.gatherPointCount, b.clusters.size(),
+              b.transport.links.size());
   std::printf("  default bake %.3f s (best of 3, %d threads)   target <= 0.5 s: %s\n   ", best,
               threads, mark(best <= 0.5));
   printStages(b);
@@ -244,9 +244,9 @@ int sponza(int threads) {
   std::printf("  bake         %.1f s from load to lightmaps   target <= 60 s: %s\n   ", seconds,
               mark(seconds <= 60.0));
   printStages(b);
-  std::printf("\n  texels       %u (%zu valid), %u clusters, %zu texel + %zu cluster links\n",
-              b.texels.size(), valid, b.clusters.size(), b.transport.texelLinks.size(),
-              b.transport.clusterLinks.size());
+  std::printf("\n  texels       %u (%zu valid), %u gather points, %u clusters, %zu links\n",
+              b.texels.size(), valid, b.transport.gatherPointCount, b.clusters.size(),
+              b.transport.links.size());
   std::printf("  peak memory  %.2f GB (whole process)   target <= 4 GB: %s\n", peak,
               mark(peak <= 4.0));
   compareThroughput(scene, b, bestPrecompute);

@@ -407,6 +407,7 @@ TEST(BakerClusters, FurnaceBoxHasFourClustersPerFace) {
 
   ClusterOptions options;
   options.clusterSize = 0.5f;
+  options.clusterTexels = 0.0f;  // metres alone
   const Clusters clusters = computeClusters(scene, nullptr, texels, nullptr, options);
   expectClusterInvariants(scene, texels, clusters, options);
   EXPECT_EQ(clusters.size(), 24u);
@@ -425,11 +426,40 @@ TEST(BakerClusters, FurnaceBoxHasFourClustersPerFace) {
   }
 }
 
+// Clusters shrink with the lightmap's texels: at 32 texels/m and 4 texels across, a 0.5 m cell
+// splits into clusters of at most 4 texel edges (one more for the texels' own size).
+TEST(BakerClusters, ClusterTexelsBoundsTheExtentInTexels) {
+  scenes::FurnaceOptions fo;
+  fo.size = 1.0f;
+  const Scene scene = unwrapped(scenes::makeFurnaceBox(fo), 32.0f);
+  auto tracer = buildOrDie(scene);
+  ASSERT_TRUE(tracer);
+  const TexelSet texels = texelsOrDie(scene, *tracer);
+  ClusterOptions options;
+  options.clusterSize = 0.5f;
+  options.clusterTexels = 4.0f;
+  const Clusters clusters = computeClusters(scene, nullptr, texels, nullptr, options);
+  expectClusterInvariants(scene, texels, clusters, options);
+  const float edge = 1.0f / 32.0f;
+  for (uint32_t c = 0; c < clusters.size(); ++c) {
+    glm::vec3 lo(1e30f), hi(-1e30f);
+    for (uint32_t k = clusters.firstTexel[c]; k < clusters.firstTexel[c + 1]; ++k) {
+      lo = glm::min(lo, texels.position[clusters.memberTexels[k]]);
+      hi = glm::max(hi, texels.position[clusters.memberTexels[k]]);
+    }
+    const glm::vec3 extent = hi - lo;
+    EXPECT_LE(std::max({extent.x, extent.y, extent.z}), 5.0f * edge) << "cluster " << c;
+  }
+  // Six 1 m faces in cells of at most 4 × 4 texels: at least 6 × 8 × 8.
+  EXPECT_GE(clusters.size(), 6u * 64u);
+}
+
 TEST(BakerClusters, CornellInvariants) {
   const Cornell c = cornell();
   ASSERT_TRUE(c.tracer);
   ClusterOptions options;
   options.clusterSize = 0.1f;
+  options.clusterTexels = 0.0f;  // metres alone
   options.maxNormalAngleDeg = 20.0f;
   const Clusters clusters = computeClusters(c.scene, nullptr, c.texels, nullptr, options);
   expectClusterInvariants(c.scene, c.texels, clusters, options);

@@ -140,13 +140,17 @@ TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
   EXPECT_LE(report.at("validTexels").get<size_t>(), texels);
   EXPECT_GT(report.at("validTexels").get<size_t>(), texels * 8 / 10);
   EXPECT_GT(report.at("clusters").get<size_t>(), 7u);  // at least one per wall, block and lamp
-  EXPECT_GT(report.at("links").at("total").get<size_t>(), 0u);
-  EXPECT_GT(report.at("raysTraced").get<uint64_t>(), texels * 32);  // draft: 32 rays per texel
+  // Gather points: at most one per valid texel, at least one per 2×2 block.
+  const size_t points = report.at("gatherPoints").get<size_t>();
+  EXPECT_LE(points, report.at("validTexels").get<size_t>());
+  EXPECT_GE(points, report.at("validTexels").get<size_t>() / 4);
+  EXPECT_GT(report.at("links").get<size_t>(), points);
+  EXPECT_GT(report.at("raysTraced").get<uint64_t>(), points * 64);  // draft: 64 rays a point
   for (const char* stage : {"load", "uv", "texels", "clusters", "links", "direct", "solve"})
     EXPECT_TRUE(report.at("stages").contains(stage)) << stage;
   EXPECT_GT(report.at("peakMemoryBytes").get<size_t>(), 1000000u);
   EXPECT_TRUE(report.at("warnings").is_array());
-  EXPECT_EQ(report.at("settings").at("texelRays").get<int>(), 32);
+  EXPECT_EQ(report.at("settings").at("texelRays").get<int>(), 64);
 
   // The EXR is linear half float at the atlas size the report gives.
   auto in = OIIO::ImageInput::open(out + "/lightmaps/lightmap0.exr");

@@ -57,7 +57,8 @@ const char kBakeHelp[] =
     "  --albedo-boost X         >= 1 pushes albedo toward white for bounces (default 1)\n"
     "  --sky r,g,b              constant sky radiance, linear (default 0,0,0)\n"
     "  --sky-image FILE         equirectangular HDR sky (overrides --sky)\n"
-    "  --cluster-size M         cluster edge length in metres (default 0.5)\n"
+    "  --cluster-size M         largest cluster edge in metres (default 0.5)\n"
+    "  --cluster-texels N       largest cluster edge in texels (default 4; 0: no limit)\n"
     "  --dilation N             texels each chart is grown into its padding (default 2)\n"
     "  --reference              compute every texel with the reference path tracer instead\n"
     "                           (slow; for validating bakes: same outputs, no clusters)\n"
@@ -86,7 +87,8 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"quality"},           {"texel-rays"},      {"cluster-rays"},
     {"light-samples"},     {"emissive-samples"}, {"bounces"},
     {"indirect-intensity"}, {"albedo-boost"},    {"sky"},
-    {"sky-image"},         {"cluster-size"},    {"dilation"},
+    {"sky-image"},         {"cluster-size"},    {"cluster-texels"},
+    {"dilation"},
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
@@ -179,7 +181,8 @@ double estimateBytes(const scenes::Scene& scene, size_t texels, size_t atlasPixe
   for (const scenes::Texture& t : scene.textures)
     textureBytes += double(t.width) * double(t.height) * sizeof(glm::vec4);
   // Charts smaller than a cluster make clusters smaller than clusterSize: count half the ideal.
-  const double side = double(o.clusters.clusterSize) * double(texelsPerUnit);
+  double side = double(o.clusters.clusterSize) * double(texelsPerUnit);
+  if (o.clusters.clusterTexels > 0.0f) side = std::min(side, double(o.clusters.clusterTexels));
   const double clusters = double(texels) / std::max(1.0, side * side * 0.5) + 1.0;
   const double perTexel = 96.0 + 36.0 + 12.0 + 8.0 * double(o.links.texelRays) +
                           4.0 * double(sources) * 2.0;
@@ -250,6 +253,8 @@ int runBake(int argc, char** argv, int first) {
       !args.getFloat("albedo-boost", 1.0f, 0.0f, 1e3f, &options.albedoBoost) ||
       !args.getFloat("cluster-size", options.clusters.clusterSize, 0.0f, 1e6f,
                      &options.clusters.clusterSize) ||
+      !args.getFloat("cluster-texels", options.clusters.clusterTexels, 0.0f, 1e6f,
+                     &options.clusters.clusterTexels) ||
       !args.getInt("dilation", 2, 0, 64, &options.dilation) ||
       !args.getInt("threads", 0, 0, 1024, &threads) ||
       !args.getInt("spp", 1024, 1, 1 << 24, &options.referenceOptions.samples) ||
@@ -368,6 +373,7 @@ int runBake(int argc, char** argv, int first) {
                                               ? std::string()
                                               : fs::absolute(options.skyImage).string()},
                              {"clusterSize", options.clusters.clusterSize},
+                             {"clusterTexels", options.clusters.clusterTexels},
                              {"dilation", options.dilation},
                              {"threads", threadCount()},
                              {"reference", options.reference},
@@ -393,9 +399,9 @@ int runBake(int argc, char** argv, int first) {
     const baker::BakeResult& r = baked.value();
     size_t valid = 0;
     for (uint8_t v : r.texels.valid) valid += v ? 1 : 0;
-    std::printf("texels        %u (%zu valid), clusters %u, links %zu\n", r.texels.size(), valid,
-                r.clusters.size(),
-                r.transport.texelLinks.size() + r.transport.clusterLinks.size());
+    std::printf("texels        %u (%zu valid), gather points %u, clusters %u, links %zu\n",
+                r.texels.size(), valid, r.transport.gatherPointCount, r.clusters.size(),
+                r.transport.links.size());
     std::printf("rays          %llu\n", static_cast<unsigned long long>(r.raysTraced));
     std::printf("time         ");
     for (const baker::StageTime& s : info.extraStages) std::printf(" %s %.2f s,", s.name.c_str(), s.seconds);

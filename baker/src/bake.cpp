@@ -91,13 +91,8 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   std::copy(sky, sky + runtime::kShCount, tr.skySh);
   // The solver indexes these without checks; a stage that filled them inconsistently is a bug
   // to report, not a crash.
-  if (tr.clusterMaterial.size() != tr.clusterCount ||
-      tr.clusterAlbedoTexture.size() != tr.clusterCount ||
-      tr.texelLinks.rows() != tr.texelCount || tr.clusterLinks.rows() != tr.clusterCount)
-    return Status::error(format("internal error: inconsistent transport (%u texels, %u clusters, "
-                                "%zu texel link rows, %zu cluster link rows)",
-                                tr.texelCount, tr.clusterCount, tr.texelLinks.rows(),
-                                tr.clusterLinks.rows()));
+  if (const std::string why = tr.validate(); !why.empty())
+    return Status::error("internal error: inconsistent transport: " + why);
 
   t0 = Clock::now();
   progress.begin("solve", 1);
@@ -120,14 +115,14 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
 BakeOptions bakePreset(Quality quality) {
   BakeOptions o;  // the defaults are the default preset
   if (quality == Quality::Draft) {
-    o.links.texelRays = 32;
+    o.links.texelRays = 64;
     o.links.clusterRays = 128;
     o.links.filterPasses = 3;
     o.direct.lightSamples = 8;
     o.direct.emissiveSamples = 8;
     o.direct.penumbraSamples = 64;
   } else if (quality == Quality::High) {
-    o.links.texelRays = 256;
+    o.links.texelRays = 512;
     o.links.clusterRays = 1024;
     o.links.filterPasses = 1;
     o.direct.lightSamples = 32;

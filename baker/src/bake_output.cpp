@@ -260,10 +260,8 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   report["texels"] = texels.size();
   report["validTexels"] = valid;
   report["clusters"] = result.clusters.size();
-  report["links"] = {{"texel", result.transport.texelLinks.size()},
-                     {"cluster", result.transport.clusterLinks.size()},
-                     {"total", result.transport.texelLinks.size() +
-                                   result.transport.clusterLinks.size()}};
+  report["gatherPoints"] = result.transport.gatherPointCount;
+  report["links"] = result.transport.links.size();
   report["sources"] = {{"lights", lights}, {"emissiveMaterials", emissive}};
   report["raysTraced"] = result.raysTraced;
   report["stages"] = stages;

@@ -169,6 +169,11 @@ class GroupClusterer {
       b.clear();
     }
     float limit = options_.clusterSize > 0.0f ? options_.clusterSize : std::numeric_limits<float>::infinity();
+    if (options_.clusterTexels > 0.0f) {
+      float edge = 0.0f;
+      for (uint32_t t : node) edge += texels_.edge[t];
+      limit = std::min(limit, options_.clusterTexels * edge / float(node.size()));
+    }
     if (options_.adaptiveScale > 0.0f && std::isfinite(median))
       limit = std::min(limit, options_.adaptiveScale * median);
     if (!(extent[axis] > limit)) return false;

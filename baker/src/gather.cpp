@@ -1,5 +1,12 @@
-// The texels' gather rays (transport_precompute.h): one pass of cosine-distributed rays per
-// valid texel, recording what each ray reached, the sky it saw and how far it went.
+// The texels' gather rays (transport_precompute.h): cosine-distributed rays from every valid
+// texel, recording what each ray reached, the sky it saw and how far it went, and the gather
+// points that pool them.
+//
+// Bounced light is smooth away from other geometry, so a 2×2 block of texels on one surface
+// shares one gather point and each of its texels casts a quarter of the rays (interleaved, so the
+// four sets form one stratified set). Near other geometry bounced light changes within a texel
+// or two: a texel there is a gather point of its own, with a full set of rays plus nearRays more
+// that resolve its near field.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -40,62 +47,158 @@ uint32_t validNeighbour(const TexelSet& texels, uint32_t t) {
   return best;
 }
 
+// Two texels that may share a gather point: same instance, normals within 30°, on one plane.
+bool sameSurface(const TexelSet& texels, uint32_t a, uint32_t b) {
+  if (texels.instance[a] != texels.instance[b]) return false;
+  if (glm::dot(texels.normal[a], texels.normal[b]) < 0.866f) return false;
+  const glm::vec3 d = texels.position[b] - texels.position[a];
+  const float distance = glm::length(d);
+  return std::abs(glm::dot(texels.geometricNormal[a], d)) <= 0.2f * distance &&
+         std::abs(glm::dot(texels.geometricNormal[b], d)) <= 0.2f * distance;
+}
+
+// Groups the valid texels into 2×2 atlas blocks on one surface; texels near other geometry
+// (TexelSet::nearGeometry) stay alone. Returns per texel its group, numbered in atlas scan
+// order, and the group sizes.
+void formBlocks(const TexelSet& texels, std::vector<uint32_t>& groupOf,
+                std::vector<uint8_t>& groupSize) {
+  groupOf.assign(texels.size(), kNoTexel);
+  groupSize.clear();
+  for (const runtime::AtlasLayout& layout : texels.atlases)
+    for (int by = 0; by < layout.height; by += 2)
+      for (int bx = 0; bx < layout.width; bx += 2) {
+        uint32_t members[4];
+        int count = 0;
+        for (int j = 0; j < 2; ++j)
+          for (int i = 0; i < 2; ++i) {
+            const int x = bx + i, y = by + j;
+            if (x >= layout.width || y >= layout.height) continue;
+            const uint32_t t = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
+            if (t != kNoTexel && texels.valid[t]) members[count++] = t;
+          }
+        // Greedy: each unassigned texel opens a group that takes the later ones it shares a
+        // surface with (and which share one with every member so far).
+        for (int i = 0; i < count; ++i) {
+          const uint32_t a = members[i];
+          if (groupOf[a] != kNoTexel) continue;
+          const uint32_t g = uint32_t(groupSize.size());
+          groupOf[a] = g;
+          groupSize.push_back(1);
+          if (texels.nearGeometry[a]) continue;
+          uint32_t in[4] = {a};
+          int size = 1;
+          for (int j = i + 1; j < count; ++j) {
+            const uint32_t b = members[j];
+            if (groupOf[b] != kNoTexel || texels.nearGeometry[b]) continue;
+            bool fits = true;
+            for (int k = 0; k < size && fits; ++k) fits = sameSurface(texels, in[k], b);
+            if (!fits) continue;
+            groupOf[b] = g;
+            in[size++] = b;
+          }
+          groupSize.back() = uint8_t(size);
+        }
+      }
+}
+
+// Rays of each texel of a group of `size`: the group casts `rays` in all (three share as four).
+uint32_t raysPerMember(uint32_t rays, uint32_t size) {
+  return std::max(1u, rays / (size == 3 ? 4u : std::max(1u, size)));
+}
+
+// What a texel's rays summed to, for its own decisions and its gather point's pooled values.
+struct TexelRays {
+  double sky[kShCount] = {};
+  double inverseDistance = 0.0;
+  uint32_t count = 0;
+};
+
 }  // namespace
 
 Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tracer,
                                  TexelSet& texels, const LinkOptions& options,
                                  Progress& progress) {
-  if (options.texelRays <= 0) return Status::error("gatherTexels: texelRays must be positive");
+  if (options.texelRays <= 0 || options.texelRays > 16384)
+    return Status::error("gatherTexels: texelRays must be between 1 and 16384");
   const uint32_t count = texels.size();
-  if (count >= TexelGather::kBackSide)
+  if (count > TexelGather::kTexelMask)
     return Status::error(format("gatherTexels: %u texels is more than a bake can index", count));
   TexelGather g;
   const uint32_t rays = uint32_t(options.texelRays);
   g.raysPerTexel = rays;
-  std::vector<uint32_t> first(size_t(count) * rays, TexelGather::kNoHit);  // the first pass's hits
-  std::vector<double> inverseDistance(count, 0.0);  // Σ 1/t over the texel's rays so far
-  g.sky.assign(size_t(count) * kShCount, 0.0f);
-  g.harmonicDistance.assign(count, std::numeric_limits<float>::infinity());
-  g.backHarmonicDistance.assign(count, std::numeric_limits<float>::infinity());
+
+  std::vector<uint32_t> groupOf;
+  std::vector<uint8_t> groupSize;
+  formBlocks(texels, groupOf, groupSize);
+  const uint32_t groups = uint32_t(groupSize.size());
+  std::vector<uint32_t> groupStart(size_t(groups) + 1, 0), groupTexels;
+  for (uint32_t g2 = 0; g2 < groups; ++g2) groupStart[g2 + 1] = groupStart[g2] + groupSize[g2];
+  groupTexels.resize(groupStart[groups]);
+  {
+    std::vector<uint32_t> fill(groupStart.begin(), groupStart.end() - 1);
+    for (uint32_t t = 0; t < count; ++t)
+      if (groupOf[t] != kNoTexel) groupTexels[fill[groupOf[t]]++] = t;
+  }
+  // A full block's four texels fill the four quarters of the interleaved grid; any other texel
+  // jitters over whole cells (sampling::InterleavedGrid).
+  auto quartered = [&](uint32_t t) { return groupSize[groupOf[t]] == 4; };
+
+  // The first pass: every valid texel its share of its group's rays.
+  std::vector<uint32_t> firstCount(count, 0), firstStart(size_t(count) + 1, 0);
+  for (uint32_t t = 0; t < count; ++t) {
+    if (texels.valid[t]) firstCount[t] = raysPerMember(rays, groupSize[groupOf[t]]);
+    firstStart[t + 1] = firstStart[t] + firstCount[t];
+  }
+  std::vector<uint32_t> first(firstStart[count], TexelGather::kNoHit);
+  std::vector<TexelRays> sums(count);
   // Texels found inside walls are collected apart and invalidated after the pass: hits read
   // texels.valid, so changing it during the pass would race and depend on thread timing.
   std::vector<uint8_t> buried(count, 0);
   const TexelLookup lookup(texels);
+  auto accumulate = [&](TexelRays& s, const GatherBatch::Summary& sum, uint32_t n) {
+    for (int k = 0; k < kShCount; ++k) s.sky[k] += sum.sky[k];
+    s.inverseDistance += sum.inverseDistance;
+    s.count += n;
+  };
   progress.begin("gather rays", count);
-  // Texels go in groups of 16 per batch (1024 rays by default).
-  constexpr size_t kTexelsPerBatch = 16;
-  const sampling::InterleavedGrid grid(rays);
+  constexpr size_t kRaysPerBatch = 1024;
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     GatherBatch batch;
-    std::vector<uint32_t> batchTexels;
-    for (size_t group = begin; group < end && !progress.cancelled(); group += kTexelsPerBatch) {
+    std::vector<uint32_t> batchTexels, batchFirst;
+    for (size_t t = begin; t < end && !progress.cancelled();) {
       batch.clear();
       batchTexels.clear();
-      for (size_t t = group; t < std::min(end, group + kTexelsPerBatch); ++t) {
+      batchFirst.clear();
+      for (; t < end && batch.size() < kRaysPerBatch; ++t) {
         if (!texels.valid[t]) continue;
         batchTexels.push_back(uint32_t(t));
+        batchFirst.push_back(uint32_t(batch.size()));
+        const uint32_t n = firstCount[t];
+        const sampling::InterleavedGrid grid(n);
         const sampling::Frame frame(texels.normal[t]);
         sampling::Rng rng(sampling::Stream::TexelLinks, t, 0);  // one sequence per texel
-        for (uint32_t s = 0; s < rays; ++s)
+        const bool quarter = quartered(uint32_t(t));
+        for (uint32_t s = 0; s < n; ++s)
           batch.add(texels.position[t], frame, texels.geometricNormal[t],
-                    grid.point(rng, s, texels.pixel[t].x, texels.pixel[t].y));
+                    quarter ? grid.point(rng, s, texels.pixel[t].x, texels.pixel[t].y)
+                            : grid.point(rng, s));
       }
+      if (batchTexels.empty()) break;
       batch.trace(tracer, texels, &lookup);
       for (size_t i = 0; i < batchTexels.size(); ++i) {
-        const uint32_t t = batchTexels[i];
+        const uint32_t u = batchTexels[i], n = firstCount[u];
         const GatherBatch::Summary sum =
-            batch.summarize(tracer, i * rays, (i + 1) * rays, texels.edge[t]);
+            batch.summarize(tracer, batchFirst[i], batchFirst[i] + n, texels.edge[u]);
         // Inside a wall, or wedged in a gap narrower than the texel (the 1 cm between a lamp
         // and the ceiling): light there changes within the texel's footprint, more than one
         // value can hold. No links, no sky; the lightmap fills it from its neighbours.
-        if (float(sum.backfaces) > options.maxBackfaceFraction * float(rays) ||
-            float(sum.close) >= options.maxEnclosedFraction * float(rays)) {
-          buried[t] = 1;
+        if (float(sum.backfaces) > options.maxBackfaceFraction * float(n) ||
+            float(sum.close) >= options.maxEnclosedFraction * float(n)) {
+          buried[u] = 1;
           continue;
         }
-        std::copy_n(batch.codes().begin() + long(i * rays), rays, first.begin() + long(size_t(t) * rays));
-        for (int k = 0; k < kShCount; ++k) g.sky[size_t(t) * kShCount + size_t(k)] = float(sum.sky[k]);
-        inverseDistance[t] = sum.inverseDistance;
+        std::copy_n(batch.codes().begin() + long(batchFirst[i]), n, first.begin() + long(firstStart[u]));
+        accumulate(sums[u], sum, n);
       }
     }
     progress.advance(end - begin);
@@ -103,67 +206,179 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
 
-  // A second pass for texels near other geometry (the first pass's harmonic distance under
-  // nearDistance texel edges), with a stratified set of its own.
+  // Where other geometry is close (harmonic distance under blockDistance texel edges) bounced
+  // light changes too fast to share: such a texel leaves its block for a gather point of its
+  // own with a full set of rays. Nearer still (under nearDistance edges) it casts nearRays more
+  // for its near field.
   const uint32_t more = uint32_t(std::max(0, options.nearRays));
-  std::vector<uint32_t> extra(count, 0);
+  std::vector<uint8_t> alone(count, 0), nearTexel(count, 0), keepFirst(count, 0);
+  for (uint32_t t = 0; t < count; ++t) {
+    if (!texels.valid[t] || buried[t]) continue;
+    keepFirst[t] = 1;
+    // harmonic distance < k edges  <=>  count < inverseDistance × k × edge
+    const double reach = sums[t].inverseDistance * double(texels.edge[t]);
+    nearTexel[t] = more > 0 && double(sums[t].count) < reach * double(options.nearDistance);
+    alone[t] = nearTexel[t] || double(sums[t].count) < reach * double(options.blockDistance);
+  }
+  // The rays that made a texel leave its block, or cast near rays, are not a fair sample of
+  // its light (chosen for having met geometry close by, they would overstate the near field):
+  // such a texel casts a fresh full set and keeps its first rays for nothing else. In a full
+  // block, the first staying texel casts the leaver's quarter of the grid instead (a buried
+  // texel's too), so the block's rays still cover every quarter.
+  std::vector<uint32_t> topUp(count, 0), adoptStart(size_t(count) + 1, 0), adopted;
+  std::vector<uint32_t> adopter(count, kNoTexel);
   for (uint32_t t = 0; t < count; ++t)
-    if (texels.valid[t] && !buried[t] && more > 0 &&
-        double(rays) < inverseDistance[t] * double(options.nearDistance * texels.edge[t]))
-      extra[t] = more;
+    if (nearTexel[t] || (alone[t] && groupSize[groupOf[t]] > 1)) {
+      keepFirst[t] = 0;
+      sums[t] = TexelRays();
+    }
+  for (uint32_t g2 = 0; g2 < groups; ++g2) {
+    if (groupSize[g2] != 4) continue;
+    uint32_t stay = kNoTexel;
+    for (uint32_t k = groupStart[g2]; k < groupStart[g2 + 1] && stay == kNoTexel; ++k)
+      if (keepFirst[groupTexels[k]] && !alone[groupTexels[k]]) stay = groupTexels[k];
+    for (uint32_t k = groupStart[g2]; k < groupStart[g2 + 1]; ++k) {
+      const uint32_t t = groupTexels[k];
+      if ((alone[t] || buried[t]) && stay != kNoTexel) adopter[t] = stay;
+    }
+  }
+  for (uint32_t t = 0; t < count; ++t)
+    if (adopter[t] != kNoTexel) ++adoptStart[adopter[t] + 1];
+  for (uint32_t t = 0; t < count; ++t) adoptStart[t + 1] += adoptStart[t];
+  adopted.resize(adoptStart[count]);
+  {
+    std::vector<uint32_t> fill(adoptStart.begin(), adoptStart.end() - 1);
+    for (uint32_t t = 0; t < count; ++t)
+      if (adopter[t] != kNoTexel) adopted[fill[adopter[t]]++] = t;
+  }
   std::vector<uint32_t> extraStart(size_t(count) + 1, 0);
-  for (uint32_t t = 0; t < count; ++t) extraStart[t + 1] = extraStart[t] + extra[t];
+  for (uint32_t t = 0; t < count; ++t) {
+    if (alone[t]) topUp[t] = rays - std::min(rays, keepFirst[t] ? firstCount[t] : 0u);
+    uint32_t extra = topUp[t] + (nearTexel[t] ? more : 0);
+    for (uint32_t k = adoptStart[t]; k < adoptStart[t + 1]; ++k) extra += firstCount[adopted[k]];
+    extraStart[t + 1] = extraStart[t] + extra;
+  }
   std::vector<uint32_t> second(extraStart[count], TexelGather::kNoHit);
   progress.begin("gather rays (near geometry)", count);
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     GatherBatch batch;
     std::vector<uint32_t> batchTexels;
-    const size_t perBatch = std::max<size_t>(1, 1024 / std::max<uint32_t>(1, more));
     for (size_t t = begin; t < end && !progress.cancelled();) {
       batch.clear();
       batchTexels.clear();
-      for (; t < end && batchTexels.size() < perBatch; ++t) {
-        if (!extra[t]) continue;
+      for (; t < end && batch.size() < kRaysPerBatch; ++t) {
+        if (extraStart[t + 1] == extraStart[t]) continue;
         batchTexels.push_back(uint32_t(t));
         const sampling::Frame frame(texels.normal[t]);
-        sampling::Rng rng(sampling::Stream::TexelLinks, t, 1);
-        for (uint32_t s = 0; s < more; ++s)
-          batch.add(texels.position[t], frame, texels.geometricNormal[t],
-                    sampling::stratified2(rng, s, more));
+        auto cast = [&](uint32_t n, uint64_t seed, const glm::u16vec2* quarter) {
+          const sampling::InterleavedGrid grid(std::max(1u, n));
+          sampling::Rng rng(sampling::Stream::TexelLinks, t, seed);
+          for (uint32_t s = 0; s < n; ++s)
+            batch.add(texels.position[t], frame, texels.geometricNormal[t],
+                      quarter ? grid.point(rng, s, quarter->x, quarter->y) : grid.point(rng, s));
+        };
+        // Stratified sets in the order the hits are kept: the top-up (a full set), the
+        // adopted quarters (full sets of the block), then the near set.
+        cast(topUp[t], 1, nullptr);
+        for (uint32_t k = adoptStart[t]; k < adoptStart[t + 1]; ++k)
+          cast(firstCount[adopted[k]], 3 + (k - adoptStart[t]), &texels.pixel[adopted[k]]);
+        cast(nearTexel[t] ? more : 0u, 2, nullptr);
       }
       if (batchTexels.empty()) break;
       batch.trace(tracer, texels, &lookup);
-      for (size_t i = 0; i < batchTexels.size(); ++i) {
-        const uint32_t u = batchTexels[i];
-        const GatherBatch::Summary sum = batch.summarize(tracer, i * more, (i + 1) * more);
-        std::copy_n(batch.codes().begin() + long(i * more), more,
-                    second.begin() + long(extraStart[u]));
-        for (int k = 0; k < kShCount; ++k) g.sky[size_t(u) * kShCount + size_t(k)] += float(sum.sky[k]);
-        inverseDistance[u] += sum.inverseDistance;
+      size_t at = 0;
+      for (const uint32_t u : batchTexels) {
+        const uint32_t n = extraStart[u + 1] - extraStart[u];
+        const GatherBatch::Summary sum = batch.summarize(tracer, at, at + n);
+        std::copy_n(batch.codes().begin() + long(at), n, second.begin() + long(extraStart[u]));
+        accumulate(sums[u], sum, n);
+        at += n;
       }
     }
     progress.advance(end - begin);
   }, 4096);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
+  // Which hits of a near texel lie beyond its near field (nearField texel edges): measured to
+  // the sample of the texel hit, which sits within that texel of the hit point.
+  auto farCode = [&](uint32_t from, uint32_t code) {
+    if (code == TexelGather::kNoHit) return code;
+    const uint32_t hit = code & TexelGather::kTexelMask;
+    const float reach = options.nearField * texels.edge[from];
+    const glm::vec3 d = texels.position[hit] - texels.position[from];
+    return glm::dot(d, d) > reach * reach ? (code | TexelGather::kFar) : code;
+  };
 
-  // Every texel's rays in one list; sky and distance as means over all of them.
-  g.hitStart.assign(size_t(count) + 1, 0);
-  for (uint32_t t = 0; t < count; ++t)
-    g.hitStart[t + 1] = g.hitStart[t] + (buried[t] || !texels.valid[t] ? 0 : rays + extra[t]);
-  g.hits.resize(g.hitStart[count]);
-  for (uint32_t t = 0; t < count; ++t) {
-    if (g.hitStart[t + 1] == g.hitStart[t]) {
-      std::fill_n(&g.sky[size_t(t) * kShCount], kShCount, 0.0f);
-      continue;
+  // Gather points: the blocks without the texels that left them, numbered in the blocks'
+  // order, each leaver a point of its own; then the pooled sky and distance of each point (over
+  // all its rays) for its texels.
+  std::vector<uint32_t> pointOfGroup(groups, kNoTexel);
+  g.pointOfTexel.assign(count, TexelGather::kNoHit);
+  uint32_t points = 0;
+  for (uint32_t g2 = 0; g2 < groups; ++g2)
+    for (uint32_t k = groupStart[g2]; k < groupStart[g2 + 1]; ++k) {
+      const uint32_t t = groupTexels[k];
+      if (!texels.valid[t] || buried[t]) continue;
+      if (alone[t]) {
+        g.pointOfTexel[t] = points++;
+      } else {
+        if (pointOfGroup[g2] == kNoTexel) pointOfGroup[g2] = points++;
+        g.pointOfTexel[t] = pointOfGroup[g2];
+      }
     }
-    std::copy_n(first.begin() + long(size_t(t) * rays), rays, g.hits.begin() + long(g.hitStart[t]));
-    std::copy_n(second.begin() + long(extraStart[t]), extra[t],
-                g.hits.begin() + long(g.hitStart[t] + rays));
-    const float n = float(rays + extra[t]);
-    for (int k = 0; k < kShCount; ++k) g.sky[size_t(t) * kShCount + size_t(k)] /= n;
-    if (inverseDistance[t] > 0.0) g.harmonicDistance[t] = float(double(n) / inverseDistance[t]);
+  {
+    std::vector<uint32_t> size(points, 0);
+    for (uint32_t t = 0; t < count; ++t)
+      if (g.pointOfTexel[t] != TexelGather::kNoHit) ++size[g.pointOfTexel[t]];
+    g.pointStart.assign(size_t(points) + 1, 0);
+    for (uint32_t p = 0; p < points; ++p) g.pointStart[p + 1] = g.pointStart[p] + size[p];
+    g.pointTexels.resize(g.pointStart[points]);
+    std::vector<uint32_t> fill(g.pointStart.begin(), g.pointStart.end() - 1);
+    for (uint32_t t = 0; t < count; ++t)
+      if (g.pointOfTexel[t] != TexelGather::kNoHit) g.pointTexels[fill[g.pointOfTexel[t]]++] = t;
   }
+  g.sky.assign(size_t(count) * kShCount, 0.0f);
+  g.harmonicDistance.assign(count, std::numeric_limits<float>::infinity());
+  for (uint32_t p = 0; p < points; ++p) {
+    TexelRays pooled;
+    for (uint32_t k = g.pointStart[p]; k < g.pointStart[p + 1]; ++k) {
+      const TexelRays& s = sums[g.pointTexels[k]];
+      for (int i = 0; i < kShCount; ++i) pooled.sky[i] += s.sky[i];
+      pooled.inverseDistance += s.inverseDistance;
+      pooled.count += s.count;
+    }
+    for (uint32_t k = g.pointStart[p]; k < g.pointStart[p + 1]; ++k) {
+      const uint32_t t = g.pointTexels[k];
+      for (int i = 0; i < kShCount; ++i)
+        g.sky[size_t(t) * kShCount + size_t(i)] =
+            pooled.count > 0 ? float(pooled.sky[i] / double(pooled.count)) : 0.0f;
+      if (pooled.inverseDistance > 0.0)
+        g.harmonicDistance[t] = float(double(pooled.count) / pooled.inverseDistance);
+    }
+  }
+
+  // Every texel's rays in one list: its first pass (unless it left a full block), then its
+  // top-up, adopted and near sets; all but the near set are full sets.
+  g.hitStart.assign(size_t(count) + 1, 0);
+  g.fullRays.assign(count, 0);
+  for (uint32_t t = 0; t < count; ++t) {
+    const uint32_t kept = keepFirst[t] ? firstCount[t] : 0;
+    const uint32_t extra = extraStart[t + 1] - extraStart[t];
+    const bool valid = texels.valid[t] && !buried[t];
+    g.hitStart[t + 1] = g.hitStart[t] + (valid ? kept + extra : 0);
+    if (valid) g.fullRays[t] = uint16_t(kept + extra - (nearTexel[t] ? more : 0));
+  }
+  g.hits.resize(g.hitStart[count]);
+  parallelFor(count, [&](size_t i) {
+    const uint32_t t = uint32_t(i);
+    if (g.hitStart[t + 1] == g.hitStart[t]) return;
+    uint32_t* out = &g.hits[g.hitStart[t]];
+    const uint32_t kept = keepFirst[t] ? firstCount[t] : 0;
+    std::copy_n(first.begin() + long(firstStart[t]), kept, out);
+    std::copy_n(second.begin() + long(extraStart[t]), extraStart[t + 1] - extraStart[t], out + kept);
+    if (nearTexel[t])
+      for (uint32_t k = 0; k < g.hitStart[t + 1] - g.hitStart[t]; ++k) out[k] = farCode(t, out[k]);
+  });
   std::vector<uint32_t>().swap(first);
   std::vector<uint32_t>().swap(second);
 
@@ -178,17 +393,18 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
       if (buried[t]) standIn[t] = validNeighbour(texels, t);
     for (uint32_t& code : g.hits) {
       if (code == TexelGather::kNoHit) continue;
-      const uint32_t t = code & ~TexelGather::kBackSide;
+      const uint32_t t = code & TexelGather::kTexelMask;
       if (!buried[t]) continue;
       const uint32_t s = standIn[t];
-      code = s == kNoTexel ? TexelGather::kNoHit : (s | (code & TexelGather::kBackSide));
+      code = s == kNoTexel ? TexelGather::kNoHit : (s | (code & ~TexelGather::kTexelMask));
     }
   }
   // The backs some ray reached, and how far their own rays go (for their clusters).
   g.backSeen.assign(count, 0);
+  g.backHarmonicDistance.assign(count, std::numeric_limits<float>::infinity());
   for (uint32_t code : g.hits)
     if (code != TexelGather::kNoHit && (code & TexelGather::kBackSide))
-      g.backSeen[code & ~TexelGather::kBackSide] = 1;
+      g.backSeen[code & TexelGather::kTexelMask] = 1;
   const uint32_t backRays = std::max(4u, rays / 8);
   progress.begin("gather rays (backs)", count);
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {

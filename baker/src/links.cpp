@@ -1,5 +1,6 @@
-// Stage 3 of the precompute: form factors texel -> cluster and cluster -> cluster and sky
-// transfer, from the texels' gather rays (and the back-side clusters' own rays).
+// Stage 3 of the precompute: form factors gather point -> cluster and back-side cluster ->
+// cluster, how clusters and texels read the gather points, and sky transfer, from the texels'
+// gather rays (and the back-side clusters' own rays).
 #include <algorithm>
 #include <mutex>
 #include <cmath>
@@ -183,13 +184,11 @@ void fillMaterials(const scenes::Scene& scene, const Clusters& clusters,
 // instance, same plane (normals within 30°, no step between them), closer than filterReach ×
 // the harmonic ray distance of both, and in sight of each other (a wall standing on the floor
 // between two texels must not let the lit one brighten the one under the box). The test is
-// symmetric (the sight line runs from the lower texel index), so the filter is too.
-void markFilterNeighbours(const RayTracer& tracer, const TexelSet& texels,
-                          const TexelGather& gather, const LinkOptions& options,
-                          runtime::TransportData& transport) {
-  transport.indirectFilterPasses = std::max(0, options.filterPasses);
-  transport.texelNeighbours.assign(texels.size(), 0);
-  if (transport.indirectFilterPasses == 0) return;
+// symmetric (the sight line runs from the lower texel index), so the marks are too: bit k for
+// the neighbour at runtime::kNeighbourOffsets[k].
+std::vector<uint8_t> markFilterNeighbours(const RayTracer& tracer, const TexelSet& texels,
+                                          const TexelGather& gather, const LinkOptions& options) {
+  std::vector<uint8_t> marks(texels.size(), 0);
   const float minCos = std::cos(30.0f * kPi / 180.0f);
   auto compatible = [&](uint32_t a, uint32_t b) {
     if (!texels.valid[b] || texels.instance[a] != texels.instance[b]) return false;
@@ -226,8 +225,81 @@ void markFilterNeighbours(const RayTracer& tracer, const TexelSet& texels,
       const uint32_t n = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
       if (n != kNoTexel && compatible(t, n)) mask |= uint8_t(1u << k);
     }
-    transport.texelNeighbours[t] = mask;
+    marks[t] = mask;
   });
+  return marks;
+}
+
+// Sorts (column, weight) pairs by column, sums duplicates and scales the row to sum to one.
+void appendNormalised(std::vector<std::pair<uint32_t, float>>& entries, runtime::SparseMatrix& m) {
+  std::sort(entries.begin(), entries.end());
+  std::vector<uint32_t> columns;
+  std::vector<float> weights;
+  double total = 0.0;
+  for (const auto& e : entries) total += double(e.second);
+  for (size_t i = 0; i < entries.size();) {
+    size_t j = i;
+    double w = 0.0;
+    while (j < entries.size() && entries[j].first == entries[i].first) w += double(entries[j++].second);
+    columns.push_back(entries[i].first);
+    weights.push_back(total > 0.0 ? float(w / total) : 0.0f);
+    i = j;
+  }
+  m.appendRow(columns.data(), weights.data(), columns.size());
+}
+
+// The tent over a texel's marked neighbours: 4 for itself, 2 along the axes, 1 on diagonals.
+float tentWeight(int k) {
+  return (runtime::kNeighbourOffsets[k][0] == 0 || runtime::kNeighbourOffsets[k][1] == 0) ? 2.0f
+                                                                                          : 1.0f;
+}
+
+// How texels read gather points and how gather points smooth each other, both from the tent
+// over the marked neighbours: a texel mixes the points of itself and its neighbours; a point
+// takes the mean over its texels of that same mix (the tent applied to the points' values as
+// the texels see them, averaged back over the point).
+void buildGatherMaps(const TexelSet& texels, const TexelGather& gather,
+                     const std::vector<uint8_t>& marks, const LinkOptions& options,
+                     runtime::TransportData& transport) {
+  const uint32_t count = texels.size(), points = gather.points();
+  transport.filterPasses = std::max(0, options.filterPasses);
+  const bool smooth = transport.filterPasses > 0;
+  auto mixOf = [&](uint32_t t, std::vector<std::pair<uint32_t, float>>& out) {
+    out.emplace_back(gather.pointOfTexel[t], 4.0f);
+    if (!smooth) return;
+    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+    for (int k = 0; k < 8; ++k) {
+      if (!(marks[t] & (1u << k))) continue;
+      const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[k][0];
+      const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[k][1];
+      const uint32_t n = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
+      if (n == kNoTexel || gather.pointOfTexel[n] == TexelGather::kNoHit) continue;
+      out.emplace_back(gather.pointOfTexel[n], tentWeight(k));
+    }
+  };
+  std::vector<std::pair<uint32_t, float>> entries;
+  transport.texelGather = runtime::SparseMatrix();
+  transport.texelGather.rowStart.reserve(size_t(count) + 1);
+  for (uint32_t t = 0; t < count; ++t) {
+    entries.clear();
+    if (texels.valid[t] && gather.pointOfTexel[t] != TexelGather::kNoHit) mixOf(t, entries);
+    appendNormalised(entries, transport.texelGather);
+  }
+  transport.pointFilter = runtime::SparseMatrix();
+  if (!smooth) return;
+  transport.pointFilter.rowStart.reserve(size_t(points) + 1);
+  for (uint32_t p = 0; p < points; ++p) {
+    entries.clear();
+    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
+      const size_t before = entries.size();
+      mixOf(gather.pointTexels[k], entries);
+      // Neighbours inside the point are the point itself: only the centre weight counts for
+      // it, so a block smooths with its neighbours as strongly as a texel does with its own.
+      for (size_t i = before + 1; i < entries.size(); ++i)
+        if (entries[i].first == p) entries[i].second = 0.0f;
+    }
+    appendNormalised(entries, transport.pointFilter);
+  }
 }
 
 }  // namespace
@@ -239,85 +311,74 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   if (options.clusterRays <= 0) return Status::error("computeLinks: clusterRays must be positive");
   const uint32_t texelCount = texels.size();
   const uint32_t clusterCount = clusters.size();
+  const uint32_t points = gather.points();
   const uint32_t rays = gather.raysPerTexel;  // back clusters cast as many per texel
   if (clusters.texelCluster.size() != texelCount)
     return Status::error(format("computeLinks: clusters cover %zu texels, the texel set has %u",
                                 clusters.texelCluster.size(), texelCount));
   if (gather.hitStart.size() != size_t(texelCount) + 1 ||
-      gather.sky.size() != size_t(texelCount) * kShCount)
+      gather.sky.size() != size_t(texelCount) * kShCount ||
+      gather.pointOfTexel.size() != texelCount || gather.fullRays.size() != texelCount)
     return Status::error("computeLinks: the gather does not match the texel set");
   if (clusterCount > 0 && clusters.firstTexel.size() != size_t(clusterCount) + 1)
     return Status::error("computeLinks: Clusters::firstTexel needs one entry per cluster plus one");
 
   transport.texelCount = texelCount;
   transport.clusterCount = clusterCount;
+  transport.gatherPointCount = points;
   transport.atlases = texels.atlases;
   fillMaterials(scene, clusters, transport);
 
   // The cluster a hit code lands in: the texel's front cluster, or its back-side cluster.
   auto clusterOf = [&](uint32_t code) -> uint32_t {
     if (code == TexelGather::kNoHit) return kNoTexel;
-    const uint32_t t = code & ~TexelGather::kBackSide;
+    const uint32_t t = code & TexelGather::kTexelMask;
     return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
   };
-  // Texel rows: what each texel's own rays reached, counted per cluster in a dense array (one
-  // per block of rows; only the few dozen clusters a row touches are sorted).
-  transport.texelSky.assign(size_t(texelCount) * kShCount, 0.0f);
-  struct Counter {
-    std::vector<uint16_t> count;
-    std::vector<uint32_t> touched;
-  };
-  progress.begin("form factors (texels)", texelCount);
-  buildRows(
-      texelCount, progress, [&] { return Counter{std::vector<uint16_t>(clusterCount, 0), {}}; },
-      [&](size_t t, Counter& counter, std::vector<Link>& row) {
-        if (!texels.valid[t]) return;
-        const uint32_t firstHit = gather.hitStart[t], lastHit = gather.hitStart[t + 1];
-        if (firstHit == lastHit) return;
-        for (uint32_t k = firstHit; k < lastHit; ++k) {
-          const uint32_t c = clusterOf(gather.hits[k]);
-          if (c == kNoTexel) continue;
-          if (counter.count[c]++ == 0) counter.touched.push_back(c);
-        }
-        const float perRay = 1.0f / float(lastHit - firstHit);
-        std::sort(counter.touched.begin(), counter.touched.end());
-        for (uint32_t c : counter.touched) {
-          row.push_back({c, float(counter.count[c]) * perRay});
-          counter.count[c] = 0;
-        }
-        counter.touched.clear();
-        dropWeakLinks(options.minWeight, row);
-        std::copy_n(&gather.sky[t * kShCount], kShCount, &transport.texelSky[t * kShCount]);
-      },
-      transport.texelLinks, 1024);
-  progress.end();
-  if (progress.cancelled()) return Status::error("cancelled");
+  std::vector<uint32_t> backClusters;
+  for (uint32_t c = 0; c < clusterCount; ++c)
+    if (clusters.back[c] && clusters.firstTexel[c] < clusters.firstTexel[c + 1]) backClusters.push_back(c);
 
-  // Cluster rows. A front cluster gathers what its texels gather (area-weighted, all of their
-  // rays, through their rows); a back cluster of a double-sided surface casts clusterRays rays of its own from the
-  // back of its texels (round robin, each texel stratifying its share).
-  const uint32_t clusterRays = uint32_t(options.clusterRays);
-  const TexelLookup lookup(texels);
-  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0.0f);
-  progress.begin("form factors (clusters)", clusterCount);
-  // A front cluster: the area-weighted mean of its members' texel rows (all their rays).
-  auto frontRow = [&](uint32_t c, RowBuilder& row) {
-    float* sky = &transport.clusterSky[size_t(c) * kShCount];
-    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
-    double area = 0.0;
-    for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
-    const runtime::SparseLinks& tl = transport.texelLinks;
-    for (uint32_t k = first; k < last; ++k) {
-      const uint32_t t = clusters.memberTexels[k];
-      const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
-      for (uint32_t i = tl.rowStart[t]; i < tl.rowStart[t + 1]; ++i)
-        row.add(tl.target[i], share * double(tl.weightAt(t, i)));
-      for (int i = 0; i < kShCount; ++i)
-        sky[i] += float(share * double(gather.sky[size_t(t) * kShCount + size_t(i)]));
+  // A gather point's row: its texels' rays pooled. Hits in the near field count over all the
+  // point's rays; hits beyond it were kept from the full sets only, and share what the near
+  // hits and the misses leave (a ratio estimate), so every row plus its misses sums to exactly
+  // 1 and a closed room neither gains nor loses light.
+  auto pointRow = [&](uint32_t p, RowBuilder& row) {
+    uint32_t all = 0, near = 0, misses = 0, farFull = 0;
+    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
+      const uint32_t t = gather.pointTexels[k];
+      const uint32_t firstHit = gather.hitStart[t], n = gather.hitStart[t + 1] - firstHit;
+      all += n;
+      for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t code = gather.hits[firstHit + i];
+        if (code == TexelGather::kNoHit) ++misses;
+        else if (!(code & TexelGather::kFar)) ++near;
+        else if (i < gather.fullRays[t]) ++farFull;
+      }
+    }
+    if (all == 0) return;
+    const double farMass = double(all - near - misses) / double(all);
+    // No full ray went far although others did: their share stays with the near hits.
+    const double nearWeight = farFull > 0 || near == 0 ? 1.0 / double(all)
+                                                       : (1.0 - double(misses) / all) / near;
+    const double farWeight = farFull > 0 ? farMass / double(farFull) : 0.0;
+    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
+      const uint32_t t = gather.pointTexels[k];
+      const uint32_t firstHit = gather.hitStart[t], n = gather.hitStart[t + 1] - firstHit;
+      for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t code = gather.hits[firstHit + i];
+        const uint32_t c = clusterOf(code);
+        if (c == kNoTexel) continue;
+        if (!(code & TexelGather::kFar)) row.add(c, nearWeight);
+        else if (i < gather.fullRays[t]) row.add(c, farWeight);
+      }
     }
   };
   // A back cluster: rays of its own from behind its texels, as many as they would cast from the
   // front (up to clusterRays), round robin, each texel stratifying its share.
+  const uint32_t clusterRays = uint32_t(options.clusterRays);
+  const TexelLookup lookup(texels);
+  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0.0f);
   auto backRow = [&](uint32_t c, RowBuilder& row) {
     const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
     const uint32_t m = last - first;
@@ -342,19 +403,55 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     for (int i = 0; i < kShCount; ++i)
       transport.clusterSky[size_t(c) * kShCount + size_t(i)] = float(seen.sky[i] * weight);
   };
+  const size_t rowCount = size_t(points) + backClusters.size();
+  progress.begin("form factors", rowCount);
   buildRows(
-      clusterCount, progress, [&] { return RowBuilder(clusterCount); },
-      [&](size_t c, RowBuilder& row, std::vector<Link>& links) {
-        if (clusters.firstTexel[c] == clusters.firstTexel[c + 1]) return;
-        if (clusters.back[c]) backRow(uint32_t(c), row);
-        else frontRow(uint32_t(c), row);
+      rowCount, progress, [&] { return RowBuilder(clusterCount); },
+      [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
+        if (r < points) pointRow(uint32_t(r), row);
+        else backRow(backClusters[r - points], row);
         row.finish(options.minWeight, links);
       },
       // Small blocks: the back-side clusters at the end trace rays, the others don't.
-      transport.clusterLinks, 64);
+      transport.links, 64);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
-  markFilterNeighbours(tracer, texels, gather, options, transport);
+
+  // Sky transfer per texel (its gather point's, as half floats) and per front cluster (the
+  // area-weighted mean over its texels).
+  transport.texelSky.assign(size_t(texelCount) * kShCount, 0);
+  for (uint32_t t = 0; t < texelCount; ++t)
+    if (texels.valid[t])
+      for (int i = 0; i < kShCount; ++i)
+        transport.texelSky[size_t(t) * kShCount + size_t(i)] =
+            runtime::floatToHalf(gather.sky[size_t(t) * kShCount + size_t(i)]);
+  // What each cluster gathers: its texels' gather points, area-weighted (a back cluster: its
+  // own row).
+  transport.clusterGather = runtime::SparseMatrix();
+  std::vector<std::pair<uint32_t, float>> entries;
+  uint32_t nextBack = 0;
+  for (uint32_t c = 0; c < clusterCount; ++c) {
+    entries.clear();
+    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
+    if (clusters.back[c]) {
+      if (first < last) entries.emplace_back(points + nextBack++, 1.0f);
+    } else {
+      double area = 0.0;
+      for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
+      float* sky = &transport.clusterSky[size_t(c) * kShCount];
+      for (uint32_t k = first; k < last; ++k) {
+        const uint32_t t = clusters.memberTexels[k];
+        if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
+        const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
+        entries.emplace_back(gather.pointOfTexel[t], float(share));
+        for (int i = 0; i < kShCount; ++i)
+          sky[i] += float(share * double(gather.sky[size_t(t) * kShCount + size_t(i)]));
+      }
+    }
+    appendNormalised(entries, transport.clusterGather);
+  }
+  const std::vector<uint8_t> marks = markFilterNeighbours(tracer, texels, gather, options);
+  buildGatherMaps(texels, gather, marks, options, transport);
   return Status::ok();
 }
 

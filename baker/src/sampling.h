@@ -65,18 +65,21 @@ inline glm::vec2 stratified2(Rng& rng, uint32_t index, uint32_t count) {
 }
 
 // Interleaved stratification (Keller and Heidrich 2001) for the texels' gather rays: `count`
-// points on a gx × gy grid (gx·gy = count, gx ≥ gy, as square as count allows), each jittered
-// within one quarter of its cell, the quarter chosen by the texel's pixel parity (px, py). Four
-// texels of a 2×2 block then fill the four quarters: their rays together form one stratified
-// set four times as fine, so the smoothing of bounced light over neighbours (which averages
-// such blocks) loses far more noise than with independent patterns. Alone, each texel's
-// pattern is still one point per cell.
+// points on a gx × gy grid (gx·gy = count, gx ≥ gy, as square as count allows). point() jitters
+// each within one quarter of its cell, the quarter chosen by the texel's pixel parity (px, py):
+// the four texels of a 2×2 block that pools its rays fill the four quarters, one stratified set
+// four times as fine. Alone such a pattern covers a quarter of every cell, a biased sample, so
+// a texel that does not pool with all three others jitters over whole cells (point(rng, i)).
 struct InterleavedGrid {
   uint32_t gx = 1, gy = 1;
   explicit InterleavedGrid(uint32_t count) {
     gy = uint32_t(std::sqrt(double(count)));
     while (gy > 1 && count % gy != 0) --gy;
     gx = std::max(1u, count / gy);
+  }
+  glm::vec2 point(Rng& rng, uint32_t index) const {
+    const glm::vec2 u = rng.next2();
+    return {(float(index % gx) + u.x) / float(gx), (float((index / gx) % gy) + u.y) / float(gy)};
   }
   glm::vec2 point(Rng& rng, uint32_t index, uint32_t px, uint32_t py) const {
     const glm::vec2 u = rng.next2();

@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <sstream>
 
 #include "afterglow/runtime/transport.h"
 
@@ -37,6 +39,170 @@ void SparseLinks::appendRow(const uint32_t* targets, const float* weights, size_
     weight.push_back(uint16_t(std::min(q, 65535.0f)));
   }
   rowStart.push_back(uint32_t(target.size()));
+}
+
+uint16_t floatToHalf(float value) {
+  uint32_t f;
+  std::memcpy(&f, &value, 4);
+  const uint32_t sign = (f >> 16) & 0x8000u;
+  const uint32_t exponent = (f >> 23) & 0xffu;
+  uint32_t mantissa = f & 0x7fffffu;
+  if (exponent == 0xffu)  // Inf and NaN (kept a NaN)
+    return uint16_t(sign | 0x7c00u | (mantissa ? 0x200u : 0u));
+  const int e = int(exponent) - 127 + 15;
+  if (e >= 31) return uint16_t(sign | 0x7c00u);  // overflow: Inf
+  if (e <= 0) {
+    // Subnormal half (or zero): shift the mantissa with its implicit bit in, round to even.
+    if (e < -10) return uint16_t(sign);
+    mantissa |= 0x800000u;
+    const uint32_t shift = uint32_t(14 - e);
+    uint32_t half = mantissa >> shift;
+    const uint32_t rest = mantissa & ((1u << shift) - 1u), halfway = 1u << (shift - 1u);
+    if (rest > halfway || (rest == halfway && (half & 1u))) ++half;
+    return uint16_t(sign | half);
+  }
+  uint32_t half = (uint32_t(e) << 10) | (mantissa >> 13);
+  const uint32_t rest = mantissa & 0x1fffu;
+  if (rest > 0x1000u || (rest == 0x1000u && (half & 1u))) ++half;  // may carry into Inf: right
+  return uint16_t(sign | half);
+}
+
+float halfToFloat(uint16_t half) {
+  const uint32_t sign = uint32_t(half & 0x8000u) << 16;
+  const uint32_t exponent = (half >> 10) & 0x1fu;
+  uint32_t mantissa = half & 0x3ffu;
+  uint32_t f;
+  if (exponent == 0) {
+    if (mantissa == 0) {
+      f = sign;
+    } else {  // subnormal: normalise
+      int e = -1;
+      do {
+        ++e;
+        mantissa <<= 1;
+      } while (!(mantissa & 0x400u));
+      f = sign | (uint32_t(127 - 15 - e) << 23) | ((mantissa & 0x3ffu) << 13);
+    }
+  } else if (exponent == 31) {
+    f = sign | 0x7f800000u | (mantissa << 13);
+  } else {
+    f = sign | ((exponent + 127 - 15) << 23) | (mantissa << 13);
+  }
+  float out;
+  std::memcpy(&out, &f, 4);
+  return out;
+}
+
+namespace {
+
+// Checks a row-compressed matrix's shape: rows+1 ascending offsets ending at the entry count,
+// and every column below `columns`.
+template <class Column>
+bool checkRows(const std::vector<uint32_t>& rowStart, const std::vector<Column>& column,
+               size_t rows, size_t columns, const char* name, std::ostringstream& why) {
+  if (rowStart.size() != rows + 1) {
+    why << name << ": " << (rowStart.empty() ? 0 : rowStart.size() - 1) << " rows, expected "
+        << rows;
+    return false;
+  }
+  if (rowStart.front() != 0 || rowStart.back() != column.size()) {
+    why << name << ": row offsets do not cover its " << column.size() << " entries";
+    return false;
+  }
+  for (size_t r = 0; r < rows; ++r)
+    if (rowStart[r] > rowStart[r + 1]) {
+      why << name << ": row " << r << " ends before it starts";
+      return false;
+    }
+  for (size_t k = 0; k < column.size(); ++k)
+    if (size_t(column[k]) >= columns) {
+      why << name << ": entry " << k << " refers to " << column[k] << " of " << columns;
+      return false;
+    }
+  return true;
+}
+
+}  // namespace
+
+std::string TransportData::validate() const {
+  std::ostringstream why;
+  const size_t texels = texelCount, clusters = clusterCount, points = gatherPointCount;
+  // rows() is rowStart.size() - 1: an empty offset array would wrap around.
+  if (links.rowStart.empty() || clusterGather.rowStart.empty() || pointFilter.rowStart.empty() ||
+      texelGather.rowStart.empty())
+    return "a sparse matrix has no row offsets (not even the leading 0)";
+  if (links.rows() < points) {
+    why << "links: " << links.rows() << " rows, fewer than the " << points << " gather points";
+    return why.str();
+  }
+  const size_t rows = links.rows();
+  if (!checkRows(links.rowStart, links.target, rows, clusters, "links", why)) return why.str();
+  if (links.weight.size() != links.target.size() || links.rowScale.size() != rows)
+    return "links: weights or row scales do not match the links";
+  if (!checkRows(clusterGather.rowStart, clusterGather.column, clusters, rows, "cluster gather", why) ||
+      !checkRows(pointFilter.rowStart, pointFilter.column,
+                 pointFilter.rows() == 0 ? 0 : points, points, "gather point filter", why) ||
+      !checkRows(texelGather.rowStart, texelGather.column, texels, points, "texel gather", why))
+    return why.str();
+  if (clusterGather.weight.size() != clusterGather.column.size() ||
+      pointFilter.weight.size() != pointFilter.column.size() ||
+      texelGather.weight.size() != texelGather.column.size())
+    return "a sparse matrix has as many weights as columns";
+  if (filterPasses < 0 || (filterPasses > 0 && pointFilter.rows() != points))
+    return "the gather point filter does not cover the gather points";
+  if (clusterMaterial.size() != clusters || clusterAlbedoTexture.size() != clusters ||
+      clusterEmissionTexture.size() != clusters) {
+    why << "per-cluster material arrays do not have " << clusters << " entries";
+    return why.str();
+  }
+  for (size_t c = 0; c < clusters; ++c)
+    if (clusterMaterial[c] >= materials.size()) {
+      why << "cluster " << c << " uses material " << clusterMaterial[c] << " of "
+          << materials.size();
+      return why.str();
+    }
+  if (!texelSky.empty() && texelSky.size() != texels * kShCount) return "texel sky transfer size";
+  if (!clusterSky.empty() && clusterSky.size() != clusters * kShCount)
+    return "cluster sky transfer size";
+  for (size_t i = 0; i < sources.size(); ++i) {
+    const Source& s = sources[i];
+    if ((!s.texelTransfer.empty() && s.texelTransfer.size() != texels) ||
+        (!s.clusterTransfer.empty() && s.clusterTransfer.size() != clusters)) {
+      why << "source " << i << " ('" << s.name << "'): transfer sizes do not match";
+      return why.str();
+    }
+    if (s.kind == SourceKind::Emissive && s.material >= materials.size()) {
+      why << "source " << i << " ('" << s.name << "'): material " << s.material << " of "
+          << materials.size();
+      return why.str();
+    }
+  }
+  for (size_t a = 0; a < atlases.size(); ++a) {
+    const AtlasLayout& l = atlases[a];
+    const size_t pixels = size_t(std::max(l.width, 0)) * size_t(std::max(l.height, 0));
+    if (l.width <= 0 || l.height <= 0 || l.texelOfPixel.size() != pixels) {
+      why << "atlas " << a << ": " << l.texelOfPixel.size() << " pixels for " << l.width << "x"
+          << l.height;
+      return why.str();
+    }
+    for (uint32_t t : l.texelOfPixel)
+      if (t != kNoTexel && t >= texels) {
+        why << "atlas " << a << ": a pixel refers to texel " << t << " of " << texels;
+        return why.str();
+      }
+    if (l.mixPixel.size() + 1 != l.mixStart.size() || l.mixTexel.size() != l.mixWeight.size()) {
+      why << "atlas " << a << ": mixes do not match their offsets";
+      return why.str();
+    }
+    if (!checkRows(l.mixStart, l.mixTexel, l.mixPixel.size(), texels, "atlas mixes", why))
+      return why.str();
+    for (uint32_t p : l.mixPixel)
+      if (p >= pixels) {
+        why << "atlas " << a << ": a mix writes pixel " << p << " of " << pixels;
+        return why.str();
+      }
+  }
+  return {};
 }
 
 }  // namespace afterglow::runtime

@@ -28,6 +28,9 @@ class RayTracer;
 
 struct ClusterOptions {
   float clusterSize = 0.5f;        // metres: largest extent of a cluster
+  // ... and at most this many texels across (Unity's "cluster resolution" the other way up): a
+  // finer lightmap resolves bounced light more finely, so its radiosity nodes shrink with it.
+  float clusterTexels = 4.0f;      // texel edges (<= 0: off)
   float maxNormalAngleDeg = 35.0f; // degrees: texels in a cluster stay within this normal cone
   int minTexels = 1;               // count: clusters are not split below this
   float adaptiveScale = 0.25f;     // clusters stay within this × their texels' median

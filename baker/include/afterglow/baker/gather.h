@@ -9,22 +9,40 @@ namespace afterglow::baker {
 
 struct TexelGather {
   // Hit codes: the texel whose surface a ray reached, with kBackSide set when it reached the
-  // back of a double-sided surface; kNoHit for misses (sky) and absorbed rays (backs of
+  // back of a double-sided surface and kFar when a near-geometry ray (see below) went further
+  // than its texel's near field; kNoHit for misses (sky) and absorbed rays (backs of
   // single-sided geometry, dynamic instances, surfaces without texels).
   static constexpr uint32_t kBackSide = 0x80000000u;
+  static constexpr uint32_t kFar = 0x40000000u;
+  static constexpr uint32_t kTexelMask = 0x3fffffffu;
   static constexpr uint32_t kNoHit = 0xffffffffu;
-  uint32_t raysPerTexel = 0;               // the first pass's rays per texel
-  // Texel t's rays are hits[hitStart[t] .. hitStart[t+1]): raysPerTexel, plus more for texels
-  // near other geometry (LinkOptions::nearRays), none for invalid texels.
+  uint32_t raysPerTexel = 0;  // LinkOptions::texelRays: the rays of a gather point
+  // Texel t's rays are hits[hitStart[t] .. hitStart[t+1]), none for invalid texels. The first
+  // fullRays[t] of them are stratified sets over the whole hemisphere and count for every hit;
+  // the rest, cast only by texels near other geometry, count only for hits in the near field
+  // (the far field, which changes slowly, is already sampled well enough by the first ones),
+  // and carry kFar when they went beyond it, to be left out.
   std::vector<uint32_t> hitStart;
   std::vector<uint32_t> hits;
-  std::vector<float> sky;                  // texel-major, kShCount per texel: sky SH transfer
-  std::vector<float> harmonicDistance;     // metres: N / Σ 1/d over the rays (∞: open sky)
+  std::vector<uint16_t> fullRays;
+  // Sky SH transfer, texel-major, kShCount per texel: over the texel's gather point's rays (a
+  // texel of a 2×2 block casts a quarter of them).
+  std::vector<float> sky;
+  // Metres: N / Σ 1/d over the texel's gather point's rays (∞: open sky).
+  std::vector<float> harmonicDistance;
   // Texels whose back side some ray reached (double-sided surfaces seen from behind): only
   // those get back-side clusters, since light on a back nobody sees goes nowhere. Their
   // harmonic distance seen from behind (an eighth of the rays) drives that clustering.
   std::vector<uint8_t> backSeen;
   std::vector<float> backHarmonicDistance;
+
+  // Gather points (runtime::TransportData): blocks of up to 2×2 texels on one surface whose
+  // rays are pooled into one row of links, each casting a share of raysPerTexel; texels near
+  // other geometry are points of their own with all the rays.
+  std::vector<uint32_t> pointOfTexel;  // per texel (kNoHit for invalid texels)
+  std::vector<uint32_t> pointStart;    // texels of point p: pointTexels[pointStart[p] ..
+  std::vector<uint32_t> pointTexels;   //   pointStart[p+1])
+  uint32_t points() const { return pointStart.empty() ? 0 : uint32_t(pointStart.size() - 1); }
 };
 
 }  // namespace afterglow::baker

@@ -25,12 +25,21 @@ namespace afterglow::baker {
 class RayTracer;
 
 struct LinkOptions {
-  int texelRays = 64;          // cosine-distributed gather rays per texel
+  // Cosine-distributed gather rays per gather point: a texel near other geometry casts them
+  // all, each texel of a 2×2 block on one surface a quarter.
+  int texelRays = 128;
   // Texels close to other geometry (harmonic ray distance under nearDistance texel edges: the
   // corners of a room, the floor along a box) see light that changes fast over short
-  // distances, which 64 rays resolve poorly; they cast nearRays more.
+  // distances, which a gather point's rays resolve poorly; they cast nearRays more, which count for what
+  // they hit within nearField texel edges (farther light changes slowly and the first rays
+  // sample it well enough; leaving those hits out keeps the links few).
   int nearRays = 192;
   float nearDistance = 2.0f;   // texel edges
+  float nearField = 8.0f;      // texel edges
+  // Texels whose harmonic ray distance is under this many texel edges gather alone, with a
+  // full set of rays, instead of sharing a 2×2 block's: bounced light changes over a few
+  // texels there.
+  float blockDistance = 8.0f;
   int clusterRays = 256;       // rays per back-side cluster of double-sided geometry (fewer
                                //   for small ones: at most texelRays per texel)
   // Links below this form factor are left out and the rest of their row scaled up to keep its
@@ -43,9 +52,10 @@ struct LinkOptions {
   // A texel whose rays hit geometry nearer than its own size this often sits in a gap the
   // lightmap cannot resolve (light changes within its footprint): it is marked invalid too.
   float maxEnclosedFraction = 0.75f;  // unitless
-  // Smoothing of the texels' bounced light (runtime::TransportData::texelNeighbours): passes of
-  // a 3×3 tent over neighbours on the same surface that lie within filterReach × the harmonic
-  // ray distance of both (so corners and contact shadows stay sharp). 0 passes: off.
+  // Smoothing of bounced light (runtime::TransportData::pointFilter): passes of a tent over
+  // neighbouring gather points on the same surface that lie within filterReach × the harmonic
+  // ray distance of both (so corners and contact shadows stay sharp). 0 passes: off. The
+  // texels then read the gather points around them with one more tent.
   int filterPasses = 2;
   float filterReach = 0.5f;  // unitless
 };
@@ -56,8 +66,9 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
                                  TexelSet& texels, const LinkOptions& options,
                                  Progress& progress = nullProgress());
 
-// Texel and cluster links and sky transfer from the gather (plus the back-side clusters' own
-// rays), the materials and per-cluster texture modulation.
+// The links of the gather points and of the back-side clusters (which cast rays of their own),
+// how clusters and texels read the gather points, the smoothing between gather points, sky
+// transfer, the materials and per-cluster texture modulation.
 Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const TexelSet& texels,
                     const TexelGather& gather, const Clusters& clusters,
                     const LinkOptions& options, runtime::TransportData& transport,

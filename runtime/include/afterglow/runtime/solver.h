@@ -1,13 +1,19 @@
 // The radiosity solver shared by the offline bake and the relighting runtime.
 //
-//   cluster reflected light  R_c = ρ_c · (D_c + Σ_j F_cj R_j + S_c)
-//   cluster exitance         M_c = R_c + Le_c
-//   texel value (E/π)        T_t = D_t + indirectIntensity · Σ_j F_tj R_j + S_t
+//   cluster reflected light   R_c = ρ_c · (D_c + S_c + Σ_r A_cr V_r)
+//   gathered light per row    V_r = Σ_j F_rj R_j          (rows: gather points, back clusters)
+//   texel value (E/π)         T_t = D_t + S_t + indirectIntensity · Σ_p B_tp (Φ^n V)_p
 //
 // D is direct light from punctual lights and emissive surfaces (sampled explicitly, which is why
-// emission enters texels and clusters through D and the links carry only R), S is sky light.
-// For bounces, D_c uses each light's bounceIntensity. Jacobi iteration with a double buffer keeps
-// results identical whatever the thread count.
+// emission enters texels and clusters through D and the links carry only R), S is sky light,
+// F the form factors (TransportData::links), A the clusters' gather (clusterGather), Φ one pass
+// of smoothing between gather points (pointFilter, n = filterPasses) and B the texels'
+// interpolation (texelGather). For bounces, D_c uses each light's bounceIntensity.
+//
+// One iterate() is one bounce: the clusters take up what the rows gathered, then every row
+// gathers again (the links, the cost of a bounce). After n passes from reset() the texels hold n
+// bounces. Each phase reads only what the previous one wrote, so results are identical whatever
+// the thread count.
 #pragma once
 
 #include <cstddef>
@@ -33,6 +39,9 @@ using ParallelFor =
 
 class Solver {
  public:
+  // Keeps a reference to `data`: it must outlive the solver, and prepare() must follow any
+  // change to its sources, materials or sky. Allocates everything the solver will need; no
+  // call below allocates except gatherTexels into vectors too small for the texels.
   explicit Solver(const TransportData& data);
 
   // How to spread a pass over threads (an engine's job system, the baker's pool); without one
@@ -40,43 +49,50 @@ class Solver {
   void setParallelFor(ParallelFor parallelFor) { parallelFor_ = std::move(parallelFor); }
 
   // Recomputes the per-cluster direct and sky terms and the albedos from the data's current
-  // source, material and sky settings. Call after changing any of them.
+  // source, material and sky settings. The bounced light so far stays (a relit scene converges
+  // from the old solution in a few passes).
   void prepare();
-  // Runs one Jacobi pass over the cluster links; returns the largest relative change.
+  // Runs one bounce; returns the largest relative change of any cluster's reflected light.
   float iterate();
   // Iterates to convergence or options.maxBounces passes; returns the passes run.
   int solve(const SolveOptions& options = {});
-  // Gathers the texel values (E/π, linear RGB) from the current cluster solution.
-  void gatherTexels(std::vector<glm::vec3>& texels) const;
-  // The same split in two: light that arrives directly (sources and sky) and bounced light
-  // (already scaled by indirectIntensity); their sum is gatherTexels'.
-  void gatherTexels(std::vector<glm::vec3>& direct, std::vector<glm::vec3>& indirect) const;
   // Resets the bounced light to zero (direct light only, before any pass).
   void reset();
 
+  // Texel values (E/π, linear RGB) from the current solution, split into light that arrives
+  // directly (sources and sky) and bounced light (already scaled by indirectIntensity).
+  void gatherTexels(std::vector<glm::vec3>& direct, std::vector<glm::vec3>& indirect) const;
+  // Their sum.
+  void gatherTexels(std::vector<glm::vec3>& texels) const;
+
+  // The two halves of gatherTexels apart, into arrays of texelCount values, for a runtime that
+  // keeps the direct light until a source or the sky changes:
+  void directTexels(glm::vec3* direct, bool withSky = true) const;
+  void skyTexels(glm::vec3* sky) const;  // S_t alone
+  void indirectTexels(glm::vec3* indirect) const;
+
   const std::vector<glm::vec3>& clusterReflected() const { return reflected_; }
   const std::vector<glm::vec3>& clusterAlbedo() const { return albedo_; }
+  // Per row of the links, what it gathered in the last pass (V).
+  const std::vector<glm::vec4>& rowGathered() const { return gathered_; }
 
  private:
-  // Smooths bounced light over the texelNeighbours marks, indirectFilterPasses times.
-  void filterIndirect(std::vector<glm::vec3>& indirect) const;
-
   // body(first, last) over fixed blocks of `items` items, through parallelFor_ when set.
   void forBlocks(size_t items, const std::function<void(size_t first, size_t last)>& body) const;
+  // V_r for every row from the current R.
+  void gatherRows();
 
   const TransportData& data_;
   ParallelFor parallelFor_;
-  mutable std::vector<float> blockChange_;  // iterate(): largest change per block
-  // The indirect filter's neighbours as a sparse matrix (texel rows, tent weights that sum to
-  // one), built once from the atlas layout and the marks.
-  std::vector<uint32_t> filterStart_;
-  std::vector<uint32_t> filterTexel_;
-  std::vector<float> filterWeight_;
-  mutable std::vector<glm::vec3> filterScratch_;
-  std::vector<glm::vec3> albedo_;       // boosted diffuse albedo per cluster
-  std::vector<glm::vec3> clusterDirect_;  // D_c (with bounceIntensity) + S_c
-  std::vector<glm::vec3> reflected_;    // R_c
-  std::vector<glm::vec3> next_;
+  std::vector<float> blockChange_;          // iterate(): largest change per block
+  std::vector<glm::vec3> albedo_;           // boosted diffuse albedo per cluster
+  std::vector<glm::vec3> clusterDirect_;    // D_c (with bounceIntensity) + S_c
+  std::vector<glm::vec3> reflected_;        // R_c
+  std::vector<glm::vec4> reflected4_;       // R_c padded to 16 bytes for the links' inner loop
+  std::vector<glm::vec4> gathered_;         // V_r
+  mutable std::vector<glm::vec4> filtered_; // smoothing passes over the gather points
+  mutable std::vector<glm::vec4> scratch_;
+  std::vector<glm::vec3> sourceScale_;      // per source: colour × intensity (or emission)
 };
 
 // Unity's albedo boost: pulls albedo toward white as the boost grows (albedo^(1/boost); 1 and

@@ -20,7 +20,7 @@ namespace afterglow::runtime {
 constexpr int kShCount = 9;               // SH L2 coefficients (bands 0..2)
 constexpr uint32_t kNoTexel = 0xffffffffu;
 
-// The eight atlas neighbours of a texel, in the bit order of TransportData::texelNeighbours.
+// The eight atlas neighbours of a texel.
 constexpr int kNeighbourOffsets[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0},
                                          {1, 0},   {-1, 1}, {0, 1},  {1, 1}};
 
@@ -41,6 +41,23 @@ struct SparseLinks {
   // Appends a row: n (target, form factor) pairs with ascending targets. Weights that round
   // to zero against the row's largest are left out.
   void appendRow(const uint32_t* targets, const float* weights, size_t n);
+};
+
+// Row-compressed sparse matrix with float weights, for the small linear maps around the links
+// (which gather points a cluster or a texel reads, the smoothing between gather points): row r
+// is Σ weight[k] · x[column[k]] for k in [rowStart[r], rowStart[r+1]).
+struct SparseMatrix {
+  std::vector<uint32_t> rowStart{0};
+  std::vector<uint32_t> column;
+  std::vector<float> weight;
+
+  size_t rows() const { return rowStart.size() - 1; }
+  size_t size() const { return column.size(); }
+  void appendRow(const uint32_t* columns, const float* weights, size_t n) {
+    column.insert(column.end(), columns, columns + n);
+    weight.insert(weight.end(), weights, weights + n);
+    rowStart.push_back(uint32_t(column.size()));
+  }
 };
 
 // A source of direct light whose unit transfer was precomputed: a punctual light, or all the
@@ -89,9 +106,21 @@ struct AtlasLayout {
 void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texelValues,
                   std::vector<glm::vec3>& image);
 
+// IEEE half precision, for the bulky per-texel sky transfer (the lightmaps are half floats
+// anyway). Round to nearest even; no dependence on F16C.
+uint16_t floatToHalf(float value);
+float halfToFloat(uint16_t half);
+
+// How bounced light is gathered (Enlighten's output pixels): at gather points, one per block of
+// up to 2×2 texels on one surface, or one per texel where other geometry is near and bounced
+// light changes fast. Each gather point pools its texels' rays into one row of links; a bounce
+// pass computes every row (the cost of a bounce), the clusters take their incident light from
+// the rows of their texels' gather points, and the texels interpolate theirs from the gather
+// points around them after a few smoothing passes.
 struct TransportData {
   uint32_t texelCount = 0;
   uint32_t clusterCount = 0;
+  uint32_t gatherPointCount = 0;
   std::vector<AtlasLayout> atlases;
 
   std::vector<MaterialParams> materials;
@@ -103,24 +132,38 @@ struct TransportData {
   std::vector<glm::vec3> clusterAlbedoTexture;
   std::vector<glm::vec3> clusterEmissionTexture;
 
-  SparseLinks texelLinks;    // texel -> clusters it sees
-  SparseLinks clusterLinks;  // cluster -> clusters it sees
+  // Form factors, a row per gather point (rows 0 .. gatherPointCount-1) and then a row per
+  // back-side cluster of double-sided geometry (which has no texels, and gathers with rays of
+  // its own): row -> the clusters it sees.
+  SparseLinks links;
+  // Cluster -> rows: a cluster's incident bounced light, the area-weighted mean of its texels'
+  // gather points' rows (weights sum to 1), or its own row for a back-side cluster.
+  SparseMatrix clusterGather;
+  // Gather point -> gather points: one pass of edge-aware smoothing of the gathered light (Monte
+  // Carlo noise), over neighbours on the same surface close enough to stand in; applied
+  // filterPasses times before the texels read them. Empty or 0 passes: no smoothing.
+  SparseMatrix pointFilter;
+  int filterPasses = 0;
+  // Texel -> gather points: each texel's bounced light, a tent-weighted mix of the gather
+  // points of the texels around it on the same surface (weights sum to 1). Invalid texels have
+  // empty rows.
+  SparseMatrix texelGather;
 
-  // The edge-aware smoothing of texels' bounced light (Monte Carlo gather noise): per texel, a
-  // bit per atlas neighbour (kNeighbourOffsets order) that lies on the same surface, close
-  // enough for its bounced light to stand in; indirectFilterPasses passes of a 3×3 tent over
-  // the marked neighbours. Empty or 0 passes: no smoothing.
-  std::vector<uint8_t> texelNeighbours;
-  int indirectFilterPasses = 0;
-
-  // Sky transfer: E/π = Σ_i skySh[i] * transfer[i] (per texel / cluster, kShCount floats each).
-  std::vector<float> texelSky;
+  // Sky transfer: E/π = Σ_i skySh[i] * transfer[i] (per texel / cluster, kShCount values each;
+  // half floats per texel, floats per cluster).
+  std::vector<uint16_t> texelSky;
   std::vector<float> clusterSky;
 
   // Bake-level settings (Unity semantics; 1 is physically correct).
   float indirectIntensity = 1.0f;  // scales all bounced light reaching texels
   float albedoBoost = 1.0f;        // >= 1, pushes albedo toward white for bounces
   glm::vec3 skySh[kShCount] = {};  // sky radiance as SH L2 (RGB)
+
+  // The number of rows of `links` that belong to back-side clusters.
+  uint32_t backRowCount() const { return uint32_t(links.rows()) - gatherPointCount; }
+  // Empty when every array agrees with the counts (what the solver indexes without checks),
+  // else what is wrong.
+  std::string validate() const;
 };
 
 }  // namespace afterglow::runtime

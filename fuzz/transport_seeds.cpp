@@ -1,0 +1,106 @@
+// Writes the transport fuzzer's seed corpus: a few small synthetic transports serialised by the
+// current writer, so the seeds always match the current format (no binary blobs in the repo).
+//   transport_seeds OUT_DIR
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "afterglow/runtime/transport_file.h"
+
+using namespace afterglow::runtime;
+
+namespace {
+
+// Two atlases with mixes, two materials, a light and an emissive source, links with a back-side
+// row, the three sparse maps and the sky transfer: every section non-empty.
+TransportData small(bool withSky, bool withFilter) {
+  TransportData d;
+  d.texelCount = 6;
+  d.clusterCount = 3;
+  d.gatherPointCount = 2;
+  AtlasLayout a;
+  a.width = 3;
+  a.height = 2;
+  a.texelOfPixel = {0, 1, kNoTexel, 2, 3, kNoTexel};
+  a.mixPixel = {2, 5};
+  a.mixStart = {0, 2, 3};
+  a.mixTexel = {1, 3, 3};
+  a.mixWeight = {0.5f, 0.5f, 1.0f};
+  d.atlases.push_back(a);
+  AtlasLayout b;
+  b.width = 2;
+  b.height = 1;
+  b.texelOfPixel = {4, 5};
+  d.atlases.push_back(b);
+  d.materials.push_back({"wall", glm::vec3(0.7f), glm::vec3(0.0f)});
+  d.materials.push_back({"lamp", glm::vec3(0.8f), glm::vec3(5.0f)});
+  Source light;
+  light.name = "sun";
+  light.color = glm::vec3(1.0f, 0.9f, 0.8f);
+  light.intensity = 3.0f;
+  light.texelTransfer.assign(d.texelCount, 0.25f);
+  light.clusterTransfer.assign(d.clusterCount, 0.5f);
+  d.sources.push_back(light);
+  Source lamp;
+  lamp.name = "lamp";
+  lamp.kind = SourceKind::Emissive;
+  lamp.material = 1;
+  lamp.enabled = false;
+  lamp.clusterTransfer.assign(d.clusterCount, 0.125f);
+  d.sources.push_back(lamp);
+  d.clusterMaterial = {0, 0, 1};
+  d.clusterAlbedoTexture.assign(3, glm::vec3(1.0f));
+  d.clusterEmissionTexture.assign(3, glm::vec3(0.5f));
+  const uint32_t targets[] = {0, 1, 2};
+  const float weights[] = {0.2f, 0.3f, 0.1f};
+  d.links.appendRow(targets, weights, 3);
+  d.links.appendRow(targets + 1, weights + 1, 2);
+  d.links.appendRow(targets, weights, 1);  // a back-side cluster's row
+  const uint32_t rowsOf[] = {0, 1, 2};
+  const float half[] = {0.5f, 0.5f};
+  const float one[] = {1.0f};
+  d.clusterGather.appendRow(rowsOf, half, 2);
+  d.clusterGather.appendRow(rowsOf + 1, one, 1);
+  d.clusterGather.appendRow(rowsOf + 2, one, 1);
+  if (withFilter) {
+    d.pointFilter.appendRow(rowsOf, half, 2);
+    d.pointFilter.appendRow(rowsOf, half, 2);
+    d.filterPasses = 2;
+  }
+  for (uint32_t t = 0; t < d.texelCount; ++t) d.texelGather.appendRow(rowsOf + t % 2, one, 1);
+  if (withSky) {
+    for (uint32_t i = 0; i < d.texelCount * kShCount; ++i)
+      d.texelSky.push_back(floatToHalf(0.1f * float(i % 7)));
+    d.clusterSky.assign(d.clusterCount * kShCount, 0.25f);
+    d.skySh[0] = glm::vec3(1.0f, 1.5f, 2.0f);
+  }
+  d.indirectIntensity = 1.5f;
+  d.albedoBoost = 1.25f;
+  return d;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: transport_seeds OUT_DIR\n");
+    return 2;
+  }
+  const std::string dir = argv[1];
+  const std::vector<std::pair<std::string, TransportData>> seeds = {
+      {"empty.agt", TransportData{}},
+      {"small.agt", small(true, true)},
+      {"no-sky.agt", small(false, true)},
+      {"no-filter.agt", small(true, false)},
+  };
+  for (const auto& [name, data] : seeds) {
+    std::string error;
+    if (!saveTransport(data, dir + "/" + name, &error)) {
+      std::fprintf(stderr, "transport_seeds: %s\n", error.c_str());
+      return 1;
+    }
+  }
+  std::printf("transport_seeds: wrote %zu seeds to %s\n", seeds.size(), dir.c_str());
+  return 0;
+}

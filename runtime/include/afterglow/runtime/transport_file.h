@@ -1,0 +1,102 @@
+// The transport file (OUT/transport.agt): TransportData on disk, written by the bake and loaded
+// by engines. GLM and the standard library only, like the rest of the runtime.
+//
+// Format, version 1. Everything is little-endian; floats are IEEE binary32, halves binary16.
+//
+//   header (40 bytes, at 0)
+//     0  char[8]  magic "AGLOWTR\0"
+//     8  u32      format version (kTransportVersion)
+//    12  u32      header size (40): where the section table starts
+//    16  u64      file size in bytes
+//    24  u32      section count
+//    28  u32      flags, 0 (reserved)
+//    32  u64      checksum: XXH64 of bytes [40, file size) seeded with XXH64 of bytes [0, 32)
+//                 (seed 0), so it covers every byte of the file but its own eight
+//   section table (at 40): per section 32 bytes
+//     char[4] id, u32 0 (reserved), u64 offset, u64 byte size, u64 element count
+//   section payloads: each at an offset that is a multiple of 16, in ascending order, not
+//     overlapping each other or the table; zero padding between them and up to the file size,
+//     which is a multiple of 16.
+//
+// A section payload is a sequence of fields read in a fixed order, with nothing left over:
+//   scalars    u8/u16/u32/i32/f32 at the current position, unaligned (vec3 = 3 f32)
+//   strings    u32 byte length, then that many UTF-8 bytes (no terminator, no alignment)
+//   arrays     padding to the next multiple of 16 from the section start, u64 element count,
+//              8 bytes of padding, then the elements packed: every array's data starts 16-byte
+//              aligned in the file, so it can be memcpy'd in one go (or used in place).
+//
+// Sections of version 1 (all required; any other id is skipped, so a later writer of the same
+// version may add sections that older readers ignore). "count" is the table's element count,
+// which the reader checks against the payload.
+//   INFO  count 1: u32 texelCount, u32 clusterCount, u32 gatherPointCount, i32 filterPasses,
+//         f32 indirectIntensity, f32 albedoBoost, 9 × vec3 skySh (132 bytes)
+//   ATLS  count = atlases; per atlas: i32 width, i32 height, arrays u32 texelOfPixel,
+//         u32 mixPixel, u32 mixStart, u32 mixTexel, f32 mixWeight
+//   MATL  count = materials; per material: string name, vec3 albedo, vec3 emission
+//   SRCS  count = sources; per source: string name, u8 kind (0 light, 1 emissive),
+//         u8 enabled (0/1), u16 0, u32 material, vec3 color, f32 intensity,
+//         f32 bounceIntensity, arrays f32 texelTransfer, f32 clusterTransfer
+//   CLUS  count = clusters: arrays u32 clusterMaterial, vec3 clusterAlbedoTexture,
+//         vec3 clusterEmissionTexture
+//   LINK  count = rows: arrays u32 rowStart, u32 target, u16 weight, f32 rowScale
+//   CGAT  count = rows: cluster gather, arrays u32 rowStart, u32 column, f32 weight
+//   PFLT  count = rows: gather point filter, the same three arrays
+//   TGAT  count = rows: texel gather, the same three arrays
+//   TSKY  count = values: array u16 texelSky (half floats)
+//   CSKY  count = values: array f32 clusterSky
+// (rows = the rowStart array's length minus one.)
+//
+// The reader checks, in this order: magic, version, header and file sizes, checksum, the section
+// table (every section inside the file, aligned, ascending, no duplicates, required ones present),
+// then each payload field against what is left of its section before allocating anything, so no
+// input makes it allocate much more than the file's size; then TransportData::validate() (every
+// index within its counts), whose complaint is reported against the section it concerns.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "afterglow/runtime/transport.h"
+
+namespace afterglow::runtime {
+
+constexpr uint32_t kTransportVersion = 1;
+constexpr char kTransportMagic[8] = {'A', 'G', 'L', 'O', 'W', 'T', 'R', '\0'};
+constexpr uint32_t kTransportHeaderSize = 40;
+
+// The file's bytes, exactly what saveTransport writes. Any TransportData serialises (even one
+// that validate() rejects, which parseTransport then refuses); throws std::bad_alloc only.
+std::vector<uint8_t> serializeTransport(const TransportData& data);
+
+// Writes `path` (not atomically: the baker writes a temporary name and renames it; after a failed
+// write, whatever was written is left for the caller to remove). Refuses data that validate()
+// rejects, since no reader would accept the file. On failure returns false and sets *error (when
+// error is not null) to one line starting with the path.
+bool saveTransport(const TransportData& data, const std::string& path, std::string* error);
+
+struct ParseOptions {
+  // Off only for the fuzzer, so that its mutations reach the section parser.
+  bool verifyChecksum = true;
+};
+
+// Parses a whole file image. Never throws, crashes or allocates much beyond `size` bytes on bad
+// input: returns false, leaves `out` empty (a default TransportData) and sets *error (when not
+// null) to one line naming what is wrong, e.g. "truncated: the file has 100 bytes, its header
+// says 4096" or "section 'LINK': links: entry 3 refers to 9 of 8".
+bool parseTransport(const uint8_t* bytes, size_t size, TransportData& out, std::string* error,
+                    const ParseOptions& options = {});
+
+// Reads the file with one read and parses it; errors start with the path
+// ("out/transport.agt: checksum mismatch: the file is corrupted").
+bool loadTransport(const std::string& path, TransportData& out, std::string* error);
+
+// XXH64 (xxHash's 64-bit hash, bit-exact with the reference implementation).
+uint64_t xxh64(const void* data, size_t size, uint64_t seed);
+
+// The checksum a file image should carry at offset 32 given its other bytes (see the format
+// above); `size` must be at least kTransportHeaderSize. For tools that patch files, and tests.
+uint64_t transportChecksum(const uint8_t* bytes, size_t size);
+
+}  // namespace afterglow::runtime

@@ -1,0 +1,759 @@
+// The transport file: format in transport_file.h. The writer measures the file first, then fills
+// one buffer; the reader bounds every count by the bytes left in its section before it allocates.
+#include "afterglow/runtime/transport_file.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <new>
+#include <system_error>
+#include <type_traits>
+
+namespace afterglow::runtime {
+
+// The format is little-endian and arrays are memcpy'd as they are.
+#if defined(__BYTE_ORDER__) && defined(__ORDER_LITTLE_ENDIAN__)
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "the transport file is little-endian; this host is not");
+#endif
+static_assert(sizeof(float) == 4 && sizeof(glm::vec3) == 12 &&
+                  std::is_trivially_copyable<glm::vec3>::value,
+              "vec3 arrays are copied as 3 packed floats");
+
+namespace {
+
+// ---- XXH64 -----------------------------------------------------------------------------------
+
+constexpr uint64_t kP1 = 0x9E3779B185EBCA87ull, kP2 = 0xC2B2AE3D27D4EB4Full,
+                   kP3 = 0x165667B19E3779F9ull, kP4 = 0x85EBCA77C2B2AE63ull,
+                   kP5 = 0x27D4EB2F165667C5ull;
+
+inline uint64_t rotl(uint64_t x, int r) { return (x << r) | (x >> (64 - r)); }
+inline uint64_t read64(const uint8_t* p) {
+  uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+inline uint32_t read32(const uint8_t* p) {
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+inline uint64_t round64(uint64_t acc, uint64_t input) {
+  acc += input * kP2;
+  return rotl(acc, 31) * kP1;
+}
+inline uint64_t merge64(uint64_t acc, uint64_t value) {
+  acc ^= round64(0, value);
+  return acc * kP1 + kP4;
+}
+
+// ---- Section ids -----------------------------------------------------------------------------
+
+constexpr const char* kInfo = "INFO";
+constexpr const char* kAtlases = "ATLS";
+constexpr const char* kMaterials = "MATL";
+constexpr const char* kSources = "SRCS";
+constexpr const char* kClusters = "CLUS";
+constexpr const char* kLinks = "LINK";
+constexpr const char* kClusterGather = "CGAT";
+constexpr const char* kPointFilter = "PFLT";
+constexpr const char* kTexelGather = "TGAT";
+constexpr const char* kTexelSky = "TSKY";
+constexpr const char* kClusterSky = "CSKY";
+constexpr const char* kRequired[] = {kInfo,  kAtlases,       kMaterials,   kSources,
+                                     kClusters, kLinks,      kClusterGather, kPointFilter,
+                                     kTexelGather, kTexelSky, kClusterSky};
+constexpr size_t kSectionCount = sizeof(kRequired) / sizeof(kRequired[0]);
+
+constexpr size_t kEntrySize = 32;    // one section table entry
+constexpr size_t kChecksumAt = 32;   // the checksum field in the header
+constexpr int kMaxFilterPasses = 1024;  // more would only make a hostile file hang the solver
+
+inline uint64_t align16(uint64_t x) { return (x + 15) & ~uint64_t(15); }
+
+// A section id for messages: printable ASCII as is, anything else as \xNN.
+std::string idText(const uint8_t* id) {
+  std::string s;
+  for (int i = 0; i < 4; ++i) {
+    const uint8_t c = id[i];
+    if (c >= 0x20 && c < 0x7f && c != '\'' && c != '\\') {
+      s += char(c);
+    } else {
+      static const char* hex = "0123456789abcdef";
+      s += "\\x";
+      s += hex[c >> 4];
+      s += hex[c & 15];
+    }
+  }
+  return s;
+}
+
+// ---- Writer ----------------------------------------------------------------------------------
+
+// Appends fields at `pos`; with no buffer it only measures.
+struct Out {
+  uint8_t* buf = nullptr;
+  size_t pos = 0;
+
+  void put(const void* data, size_t n) {
+    if (buf && n) std::memcpy(buf + pos, data, n);
+    pos += n;
+  }
+  template <class T>
+  void scalar(T v) {
+    static_assert(std::is_trivially_copyable<T>::value, "");
+    put(&v, sizeof(T));
+  }
+  void vec3(const glm::vec3& v) { put(&v, 12); }
+  void string(const std::string& s) {
+    scalar(uint32_t(s.size()));
+    put(s.data(), s.size());
+  }
+  // Padding bytes stay zero: the buffer starts zeroed.
+  void align() { pos = size_t(align16(pos)); }
+  template <class T>
+  void array(const std::vector<T>& v) {
+    static_assert(std::is_trivially_copyable<T>::value, "");
+    align();
+    scalar(uint64_t(v.size()));
+    scalar(uint64_t(0));
+    put(v.data(), v.size() * sizeof(T));
+  }
+  template <class SparseT>
+  void sparse(const std::vector<uint32_t>& rowStart, const std::vector<uint32_t>& column,
+              const std::vector<SparseT>& weight) {
+    array(rowStart);
+    array(column);
+    array(weight);
+  }
+};
+
+uint64_t rowsOf(const std::vector<uint32_t>& rowStart) {
+  return rowStart.empty() ? 0 : rowStart.size() - 1;
+}
+
+struct SectionWriter {
+  const char* id;
+  uint64_t count;
+  void (*write)(const TransportData&, Out&);
+};
+
+const SectionWriter kWriters[] = {
+    {kInfo, 1,
+     [](const TransportData& d, Out& o) {
+       o.scalar(d.texelCount);
+       o.scalar(d.clusterCount);
+       o.scalar(d.gatherPointCount);
+       o.scalar(int32_t(d.filterPasses));
+       o.scalar(d.indirectIntensity);
+       o.scalar(d.albedoBoost);
+       for (int i = 0; i < kShCount; ++i) o.vec3(d.skySh[i]);
+     }},
+    {kAtlases, 0,
+     [](const TransportData& d, Out& o) {
+       for (const AtlasLayout& a : d.atlases) {
+         o.scalar(int32_t(a.width));
+         o.scalar(int32_t(a.height));
+         o.array(a.texelOfPixel);
+         o.array(a.mixPixel);
+         o.array(a.mixStart);
+         o.array(a.mixTexel);
+         o.array(a.mixWeight);
+       }
+     }},
+    {kMaterials, 0,
+     [](const TransportData& d, Out& o) {
+       for (const MaterialParams& m : d.materials) {
+         o.string(m.name);
+         o.vec3(m.albedo);
+         o.vec3(m.emission);
+       }
+     }},
+    {kSources, 0,
+     [](const TransportData& d, Out& o) {
+       for (const Source& s : d.sources) {
+         o.string(s.name);
+         o.scalar(uint8_t(s.kind));
+         o.scalar(uint8_t(s.enabled ? 1 : 0));
+         o.scalar(uint16_t(0));
+         o.scalar(s.material);
+         o.vec3(s.color);
+         o.scalar(s.intensity);
+         o.scalar(s.bounceIntensity);
+         o.array(s.texelTransfer);
+         o.array(s.clusterTransfer);
+       }
+     }},
+    {kClusters, 0,
+     [](const TransportData& d, Out& o) {
+       o.array(d.clusterMaterial);
+       o.array(d.clusterAlbedoTexture);
+       o.array(d.clusterEmissionTexture);
+     }},
+    {kLinks, 0,
+     [](const TransportData& d, Out& o) {
+       o.sparse(d.links.rowStart, d.links.target, d.links.weight);
+       o.array(d.links.rowScale);
+     }},
+    {kClusterGather, 0,
+     [](const TransportData& d, Out& o) {
+       o.sparse(d.clusterGather.rowStart, d.clusterGather.column, d.clusterGather.weight);
+     }},
+    {kPointFilter, 0,
+     [](const TransportData& d, Out& o) {
+       o.sparse(d.pointFilter.rowStart, d.pointFilter.column, d.pointFilter.weight);
+     }},
+    {kTexelGather, 0,
+     [](const TransportData& d, Out& o) {
+       o.sparse(d.texelGather.rowStart, d.texelGather.column, d.texelGather.weight);
+     }},
+    {kTexelSky, 0, [](const TransportData& d, Out& o) { o.array(d.texelSky); }},
+    {kClusterSky, 0, [](const TransportData& d, Out& o) { o.array(d.clusterSky); }},
+};
+static_assert(sizeof(kWriters) / sizeof(kWriters[0]) == kSectionCount, "");
+
+// The table's element count of each section (see the header comment).
+uint64_t sectionCount(const TransportData& d, const char* id) {
+  if (id == kInfo) return 1;
+  if (id == kAtlases) return d.atlases.size();
+  if (id == kMaterials) return d.materials.size();
+  if (id == kSources) return d.sources.size();
+  if (id == kClusters) return d.clusterMaterial.size();
+  if (id == kLinks) return rowsOf(d.links.rowStart);
+  if (id == kClusterGather) return rowsOf(d.clusterGather.rowStart);
+  if (id == kPointFilter) return rowsOf(d.pointFilter.rowStart);
+  if (id == kTexelGather) return rowsOf(d.texelGather.rowStart);
+  if (id == kTexelSky) return d.texelSky.size();
+  return d.clusterSky.size();  // kClusterSky
+}
+
+// ---- Reader ----------------------------------------------------------------------------------
+
+// Reads one section's fields from [pos, end) of the file image; on failure `why` says what.
+struct In {
+  const uint8_t* file;
+  uint64_t pos, end;
+  std::string why;
+
+  uint64_t left() const { return end - pos; }
+  bool fail(const std::string& message) {
+    if (why.empty()) why = message;
+    return false;
+  }
+  bool get(void* out, size_t n, const char* what) {
+    if (left() < n)
+      return fail(std::string(what) + ": needs " + std::to_string(n) + " bytes, " +
+                  std::to_string(left()) + " left in the section");
+    std::memcpy(out, file + pos, n);
+    pos += n;
+    return true;
+  }
+  template <class T>
+  bool scalar(T& v, const char* what) {
+    return get(&v, sizeof(T), what);
+  }
+  bool vec3(glm::vec3& v, const char* what) { return get(&v, 12, what); }
+  bool string(std::string& s, const char* what) {
+    uint32_t n = 0;
+    if (!scalar(n, what)) return false;
+    if (n > left())
+      return fail(std::string(what) + ": a string of " + std::to_string(n) + " bytes, " +
+                  std::to_string(left()) + " left in the section");
+    s.assign(reinterpret_cast<const char*>(file + pos), n);
+    pos += n;
+    return true;
+  }
+  // Section payloads start 16-aligned in the file, so aligning the file offset aligns within
+  // the section too.
+  bool align(const char* what) {
+    const uint64_t next = align16(pos);
+    if (next > end)
+      return fail(std::string(what) + ": the section ends before it");
+    pos = next;
+    return true;
+  }
+  template <class T>
+  bool array(std::vector<T>& v, const char* what) {
+    static_assert(std::is_trivially_copyable<T>::value, "");
+    uint64_t n = 0, zero = 0;
+    if (!align(what) || !scalar(n, what) || !scalar(zero, what)) return false;
+    // The count is bounded by the bytes left before anything is allocated.
+    if (n > left() / sizeof(T))
+      return fail(std::string(what) + ": " + std::to_string(n) + " values of " +
+                  std::to_string(sizeof(T)) + " bytes, " + std::to_string(left()) +
+                  " bytes left in the section");
+    v.resize(size_t(n));
+    if (n) std::memcpy(v.data(), file + pos, size_t(n) * sizeof(T));
+    pos += n * sizeof(T);
+    return true;
+  }
+  // Row offsets: never empty (a matrix of no rows has the single offset 0).
+  bool rowStart(std::vector<uint32_t>& v, const char* what) {
+    if (!array(v, what)) return false;
+    if (v.empty()) return fail(std::string(what) + ": no row offsets (not even the first 0)");
+    return true;
+  }
+  // Before reserving `count` records of at least `minBytes` bytes each.
+  bool records(uint64_t count, uint64_t minBytes, const char* what) {
+    if (count > left() / minBytes)
+      return fail(std::to_string(count) + " " + what + " cannot fit in " +
+                  std::to_string(left()) + " bytes");
+    return true;
+  }
+};
+
+template <class T>
+bool readSparse(In& in, std::vector<uint32_t>& rowStart, std::vector<uint32_t>& column,
+                std::vector<T>& weight) {
+  return in.rowStart(rowStart, "row offsets") && in.array(column, "columns") &&
+         in.array(weight, "weights");
+}
+
+bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
+  if (id == kInfo) {
+    int32_t passes = 0;
+    bool ok = in.scalar(d.texelCount, "texel count") &&
+              in.scalar(d.clusterCount, "cluster count") &&
+              in.scalar(d.gatherPointCount, "gather point count") &&
+              in.scalar(passes, "filter passes") &&
+              in.scalar(d.indirectIntensity, "indirect intensity") &&
+              in.scalar(d.albedoBoost, "albedo boost");
+    for (int i = 0; ok && i < kShCount; ++i) ok = in.vec3(d.skySh[i], "sky SH");
+    if (!ok) return false;
+    if (passes < 0 || passes > kMaxFilterPasses)
+      return in.fail("filter passes " + std::to_string(passes) + " outside [0, " +
+                     std::to_string(kMaxFilterPasses) + "]");
+    d.filterPasses = passes;
+    return true;
+  }
+  if (id == kAtlases) {
+    // Two ints and five array headers at least.
+    if (!in.records(count, 8 + 5 * 16, "atlases")) return false;
+    d.atlases.resize(size_t(count));
+    for (uint64_t a = 0; a < count; ++a) {
+      AtlasLayout& l = d.atlases[size_t(a)];
+      int32_t width = 0, height = 0;
+      if (!in.scalar(width, "atlas width") || !in.scalar(height, "atlas height") ||
+          !in.array(l.texelOfPixel, "atlas pixels") || !in.array(l.mixPixel, "mix pixels") ||
+          !in.array(l.mixStart, "mix offsets") || !in.array(l.mixTexel, "mix texels") ||
+          !in.array(l.mixWeight, "mix weights")) {
+        in.why = "atlas " + std::to_string(a) + ": " + in.why;
+        return false;
+      }
+      l.width = width;
+      l.height = height;
+    }
+    return true;
+  }
+  if (id == kMaterials) {
+    if (!in.records(count, 4 + 24, "materials")) return false;
+    d.materials.resize(size_t(count));
+    for (uint64_t m = 0; m < count; ++m) {
+      MaterialParams& p = d.materials[size_t(m)];
+      if (!in.string(p.name, "name") || !in.vec3(p.albedo, "albedo") ||
+          !in.vec3(p.emission, "emission")) {
+        in.why = "material " + std::to_string(m) + ": " + in.why;
+        return false;
+      }
+    }
+    return true;
+  }
+  if (id == kSources) {
+    if (!in.records(count, 4 + 8 + 20 + 2 * 16, "sources")) return false;
+    d.sources.resize(size_t(count));
+    for (uint64_t i = 0; i < count; ++i) {
+      Source& s = d.sources[size_t(i)];
+      uint8_t kind = 0, enabled = 0;
+      uint16_t reserved = 0;
+      const bool ok = in.string(s.name, "name") && in.scalar(kind, "kind") &&
+                      in.scalar(enabled, "enabled") && in.scalar(reserved, "reserved") &&
+                      in.scalar(s.material, "material") && in.vec3(s.color, "colour") &&
+                      in.scalar(s.intensity, "intensity") &&
+                      in.scalar(s.bounceIntensity, "bounce intensity") &&
+                      (kind <= uint8_t(SourceKind::Emissive) ||
+                       in.fail("unknown kind " + std::to_string(kind))) &&
+                      (enabled <= 1 || in.fail("enabled is " + std::to_string(enabled))) &&
+                      in.array(s.texelTransfer, "texel transfer") &&
+                      in.array(s.clusterTransfer, "cluster transfer");
+      if (!ok) {
+        in.why = "source " + std::to_string(i) + ": " + in.why;
+        return false;
+      }
+      s.kind = SourceKind(kind);
+      s.enabled = enabled != 0;
+    }
+    return true;
+  }
+  if (id == kClusters) {
+    if (!in.array(d.clusterMaterial, "cluster materials") ||
+        !in.array(d.clusterAlbedoTexture, "cluster albedo textures") ||
+        !in.array(d.clusterEmissionTexture, "cluster emission textures"))
+      return false;
+    if (count != d.clusterMaterial.size())
+      return in.fail("the table says " + std::to_string(count) + " clusters, the section has " +
+                     std::to_string(d.clusterMaterial.size()));
+    return true;
+  }
+  const std::vector<uint32_t>* rowStart = nullptr;
+  if (id == kLinks) {
+    if (!readSparse(in, d.links.rowStart, d.links.target, d.links.weight) ||
+        !in.array(d.links.rowScale, "row scales"))
+      return false;
+    rowStart = &d.links.rowStart;
+  } else if (id == kClusterGather) {
+    if (!readSparse(in, d.clusterGather.rowStart, d.clusterGather.column, d.clusterGather.weight))
+      return false;
+    rowStart = &d.clusterGather.rowStart;
+  } else if (id == kPointFilter) {
+    if (!readSparse(in, d.pointFilter.rowStart, d.pointFilter.column, d.pointFilter.weight))
+      return false;
+    rowStart = &d.pointFilter.rowStart;
+  } else if (id == kTexelGather) {
+    if (!readSparse(in, d.texelGather.rowStart, d.texelGather.column, d.texelGather.weight))
+      return false;
+    rowStart = &d.texelGather.rowStart;
+  }
+  if (rowStart) {
+    if (count != rowsOf(*rowStart))
+      return in.fail("the table says " + std::to_string(count) + " rows, the section has " +
+                     std::to_string(rowsOf(*rowStart)));
+    return true;
+  }
+  size_t values = 0;
+  if (id == kTexelSky) {
+    if (!in.array(d.texelSky, "texel sky transfer")) return false;
+    values = d.texelSky.size();
+  } else {  // kClusterSky
+    if (!in.array(d.clusterSky, "cluster sky transfer")) return false;
+    values = d.clusterSky.size();
+  }
+  if (count != values)
+    return in.fail("the table says " + std::to_string(count) + " values, the section has " +
+                   std::to_string(values));
+  return true;
+}
+
+// The section a validate() complaint is about, from how it starts; null when unclear.
+const char* sectionOfComplaint(const std::string& why) {
+  static const struct {
+    const char* prefix;
+    const char* id;
+  } kPrefixes[] = {{"links", kLinks},
+                   {"cluster gather", kClusterGather},
+                   {"gather point filter", kPointFilter},
+                   {"the gather point filter", kPointFilter},
+                   {"texel gather", kTexelGather},
+                   {"texel sky", kTexelSky},
+                   {"cluster sky", kClusterSky},
+                   {"per-cluster", kClusters},
+                   {"cluster ", kClusters},
+                   {"source", kSources},
+                   {"atlas", kAtlases},
+                   {"material", kMaterials}};
+  for (const auto& p : kPrefixes)
+    if (why.compare(0, std::strlen(p.prefix), p.prefix) == 0) return p.id;
+  return nullptr;
+}
+
+bool parseImage(const uint8_t* bytes, size_t size, TransportData& d, std::string& why,
+                const ParseOptions& options) {
+  const std::string sizes = "the file has " + std::to_string(size) + " bytes";
+  if (size < 8) {
+    if (size > 0 && std::memcmp(bytes, kTransportMagic, size) == 0) {
+      why = "truncated: " + sizes + ", its header alone has " +
+            std::to_string(kTransportHeaderSize);
+      return false;
+    }
+    why = "not an afterglow transport file";
+    return false;
+  }
+  if (std::memcmp(bytes, kTransportMagic, 8) != 0) {
+    why = "not an afterglow transport file";
+    return false;
+  }
+  if (size < 12) {
+    why = "truncated: " + sizes + ", its header alone has " + std::to_string(kTransportHeaderSize);
+    return false;
+  }
+  const uint32_t version = read32(bytes + 8);
+  if (version != kTransportVersion) {
+    why = "version " + std::to_string(version) + "; this runtime reads version " +
+          std::to_string(kTransportVersion) + ": re-bake with this afterglow";
+    return false;
+  }
+  if (size < kTransportHeaderSize) {
+    why = "truncated: " + sizes + ", its header alone has " + std::to_string(kTransportHeaderSize);
+    return false;
+  }
+  const uint32_t headerSize = read32(bytes + 12);
+  const uint64_t fileSize = read64(bytes + 16);
+  const uint32_t sections = read32(bytes + 24);
+  const uint32_t flags = read32(bytes + 28);
+  if (headerSize != kTransportHeaderSize) {
+    why = "header size " + std::to_string(headerSize) + ", version 1 has " +
+          std::to_string(kTransportHeaderSize) + ": the file is corrupted";
+    return false;
+  }
+  if (fileSize != size) {
+    why = std::string(fileSize > size ? "truncated: " : "size mismatch: ") + sizes +
+          ", its header says " + std::to_string(fileSize);
+    return false;
+  }
+  if (options.verifyChecksum && transportChecksum(bytes, size) != read64(bytes + kChecksumAt)) {
+    why = "checksum mismatch: the file is corrupted";
+    return false;
+  }
+  if (flags != 0) {
+    why = "unknown header flags " + std::to_string(flags);
+    return false;
+  }
+
+  // The section table.
+  const uint64_t tableEnd = uint64_t(headerSize) + uint64_t(sections) * kEntrySize;
+  if (tableEnd > size) {
+    why = "section table: " + std::to_string(sections) + " sections need " +
+          std::to_string(tableEnd) + " bytes, " + sizes;
+    return false;
+  }
+  struct Found {
+    uint64_t offset = 0, size = 0, count = 0;
+    bool present = false;
+  } found[kSectionCount];
+  uint64_t previousEnd = tableEnd;
+  for (uint32_t i = 0; i < sections; ++i) {
+    const uint8_t* entry = bytes + headerSize + size_t(i) * kEntrySize;
+    const std::string name = "section '" + idText(entry) + "'";
+    const uint32_t reserved = read32(entry + 4);
+    const uint64_t offset = read64(entry + 8), bytesIn = read64(entry + 16),
+                   count = read64(entry + 24);
+    if (reserved != 0) {
+      why = name + ": reserved table field is " + std::to_string(reserved);
+      return false;
+    }
+    if (offset % 16 != 0) {
+      why = name + ": offset " + std::to_string(offset) + " is not a multiple of 16";
+      return false;
+    }
+    if (offset > size || bytesIn > size - offset) {
+      why = name + ": bytes " + std::to_string(offset) + " + " + std::to_string(bytesIn) +
+            " lie outside the file's " + std::to_string(size);
+      return false;
+    }
+    if (offset < previousEnd) {
+      why = name + ": offset " + std::to_string(offset) +
+            (i == 0 ? " overlaps the section table" : " overlaps the section before it");
+      return false;
+    }
+    previousEnd = offset + bytesIn;
+    for (size_t k = 0; k < kSectionCount; ++k)
+      if (std::memcmp(entry, kRequired[k], 4) == 0) {
+        if (found[k].present) {
+          why = name + " appears twice";
+          return false;
+        }
+        found[k] = {offset, bytesIn, count, true};
+      }
+    // Any other id: a section of a later writer, skipped.
+  }
+  for (size_t k = 0; k < kSectionCount; ++k)
+    if (!found[k].present) {
+      why = "missing section '" + std::string(kRequired[k]) + "'";
+      return false;
+    }
+
+  // The payloads.
+  for (size_t k = 0; k < kSectionCount; ++k) {
+    const char* id = kRequired[k];
+    In in{bytes, found[k].offset, found[k].offset + found[k].size, {}};
+    const std::string name = "section '" + std::string(id) + "'";
+    if (id == kInfo && found[k].count != 1) {
+      why = name + ": the table says " + std::to_string(found[k].count) + " entries, not 1";
+      return false;
+    }
+    if (!readSection(id, in, d, found[k].count)) {
+      why = name + ": " + in.why;
+      return false;
+    }
+    if (in.pos != in.end) {
+      why = name + ": " + std::to_string(in.end - in.pos) + " bytes left over";
+      return false;
+    }
+  }
+
+  // Every index within its counts.
+  const std::string complaint = d.validate();
+  if (!complaint.empty()) {
+    const char* id = sectionOfComplaint(complaint);
+    why = id ? "section '" + std::string(id) + "': " + complaint : "invalid transport: " + complaint;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+uint64_t xxh64(const void* data, size_t size, uint64_t seed) {
+  const uint8_t* p = static_cast<const uint8_t*>(data);
+  const uint8_t* const end = p + size;
+  uint64_t h;
+  if (size >= 32) {
+    uint64_t v1 = seed + kP1 + kP2, v2 = seed + kP2, v3 = seed, v4 = seed - kP1;
+    const uint8_t* const limit = end - 32;
+    do {
+      v1 = round64(v1, read64(p));
+      v2 = round64(v2, read64(p + 8));
+      v3 = round64(v3, read64(p + 16));
+      v4 = round64(v4, read64(p + 24));
+      p += 32;
+    } while (p <= limit);
+    h = rotl(v1, 1) + rotl(v2, 7) + rotl(v3, 12) + rotl(v4, 18);
+    h = merge64(h, v1);
+    h = merge64(h, v2);
+    h = merge64(h, v3);
+    h = merge64(h, v4);
+  } else {
+    h = seed + kP5;
+  }
+  h += uint64_t(size);
+  for (; end - p >= 8; p += 8) h = rotl(h ^ round64(0, read64(p)), 27) * kP1 + kP4;
+  if (end - p >= 4) {
+    h = rotl(h ^ (uint64_t(read32(p)) * kP1), 23) * kP2 + kP3;
+    p += 4;
+  }
+  for (; p < end; ++p) h = rotl(h ^ (uint64_t(*p) * kP5), 11) * kP1;
+  h ^= h >> 33;
+  h *= kP2;
+  h ^= h >> 29;
+  h *= kP3;
+  h ^= h >> 32;
+  return h;
+}
+
+uint64_t transportChecksum(const uint8_t* bytes, size_t size) {
+  const uint64_t seed = xxh64(bytes, kChecksumAt, 0);
+  return xxh64(bytes + kTransportHeaderSize, size - kTransportHeaderSize, seed);
+}
+
+std::vector<uint8_t> serializeTransport(const TransportData& data) {
+  // Measure, then write into one zeroed buffer (padding stays zero).
+  struct Placed {
+    uint64_t offset, size, count;
+  } placed[kSectionCount];
+  Out measure;
+  measure.pos = kTransportHeaderSize + kSectionCount * kEntrySize;
+  for (size_t k = 0; k < kSectionCount; ++k) {
+    measure.align();
+    const size_t start = measure.pos;
+    kWriters[k].write(data, measure);
+    placed[k] = {start, measure.pos - start, sectionCount(data, kWriters[k].id)};
+  }
+  measure.align();
+
+  std::vector<uint8_t> file(measure.pos, 0);
+  Out out;
+  out.buf = file.data();
+  out.put(kTransportMagic, 8);
+  out.scalar(kTransportVersion);
+  out.scalar(kTransportHeaderSize);
+  out.scalar(uint64_t(file.size()));
+  out.scalar(uint32_t(kSectionCount));
+  out.scalar(uint32_t(0));  // flags
+  out.scalar(uint64_t(0));  // checksum, below
+  for (size_t k = 0; k < kSectionCount; ++k) {
+    out.put(kWriters[k].id, 4);
+    out.scalar(uint32_t(0));
+    out.scalar(placed[k].offset);
+    out.scalar(placed[k].size);
+    out.scalar(placed[k].count);
+  }
+  for (size_t k = 0; k < kSectionCount; ++k) {
+    out.pos = size_t(placed[k].offset);
+    kWriters[k].write(data, out);
+  }
+  const uint64_t checksum = transportChecksum(file.data(), file.size());
+  std::memcpy(file.data() + kChecksumAt, &checksum, 8);
+  return file;
+}
+
+bool saveTransport(const TransportData& data, const std::string& path, std::string* error) {
+  auto failed = [&](const std::string& why) {
+    if (error) *error = path + ": " + why;
+    return false;
+  };
+  const std::string complaint = data.validate();
+  if (!complaint.empty()) return failed("not saved, the transport is invalid: " + complaint);
+  std::vector<uint8_t> bytes;
+  try {
+    bytes = serializeTransport(data);
+  } catch (const std::bad_alloc&) {
+    return failed("out of memory serialising the transport");
+  }
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (!f) return failed(std::strerror(errno));
+  const bool written = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+  const int writeErrno = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (!written || !closed) {
+    // What was written stays for the caller to remove (the baker writes a temporary name).
+    const int why = !written ? writeErrno : errno;
+    return failed(std::string("write failed: ") + std::strerror(why));
+  }
+  return true;
+}
+
+bool parseTransport(const uint8_t* bytes, size_t size, TransportData& out, std::string* error,
+                    const ParseOptions& options) {
+  out = TransportData{};
+  std::string why;
+  bool ok = false;
+  try {
+    TransportData data;
+    ok = parseImage(bytes, size, data, why, options);
+    if (ok) out = std::move(data);
+  } catch (const std::bad_alloc&) {
+    why = "out of memory reading the transport";
+    ok = false;
+  } catch (const std::exception& e) {
+    why = std::string("cannot read the transport: ") + e.what();
+    ok = false;
+  }
+  if (!ok && error) *error = why;
+  return ok;
+}
+
+bool loadTransport(const std::string& path, TransportData& out, std::string* error) {
+  out = TransportData{};
+  auto failed = [&](const std::string& why) {
+    if (error) *error = path + ": " + why;
+    return false;
+  };
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) return failed(ec.message());
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return failed(std::strerror(errno));
+  // One read into an uninitialised buffer (an 80 MB file should not be zeroed first).
+  std::unique_ptr<uint8_t[]> buffer(size <= SIZE_MAX ? new (std::nothrow) uint8_t[size_t(size)]
+                                                     : nullptr);
+  if (!buffer) {
+    std::fclose(f);
+    return failed("out of memory reading " + std::to_string(size) + " bytes");
+  }
+  const size_t got = std::fread(buffer.get(), 1, size_t(size), f);
+  const bool readError = std::ferror(f) != 0;
+  const int readErrno = errno;
+  std::fclose(f);
+  if (readError) return failed(std::string("read failed: ") + std::strerror(readErrno));
+  if (got != size)
+    return failed("the file changed size while being read (" + std::to_string(got) + " of " +
+                  std::to_string(size) + " bytes)");
+  std::string why;
+  if (!parseTransport(buffer.get(), got, out, &why)) return failed(why);
+  return true;
+}
+
+}  // namespace afterglow::runtime

@@ -1,0 +1,137 @@
+// The radiosity solver on synthetic transport with analytic answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "afterglow/runtime/solver.h"
+
+namespace afterglow::runtime {
+namespace {
+
+// A closed "furnace": n clusters that see each other uniformly (rows sum to 1), all emitting Le
+// with albedo rho, one gather point per cluster and four texels per gather point. Every texel
+// must read Le / (1 - rho).
+TransportData makeFurnace(uint32_t n, float rho, float le) {
+  TransportData d;
+  d.clusterCount = n;
+  d.gatherPointCount = n;
+  d.texelCount = n * 4;
+  d.materials.push_back({"wall", glm::vec3(rho), glm::vec3(le)});
+  d.clusterMaterial.assign(n, 0);
+  d.clusterAlbedoTexture.assign(n, glm::vec3(1.0f));
+  d.clusterEmissionTexture.assign(n, glm::vec3(1.0f));
+  Source emit;
+  emit.name = "wall";
+  emit.kind = SourceKind::Emissive;
+  emit.material = 0;
+  emit.texelTransfer.assign(d.texelCount, 1.0f);   // every texel sees only emitters
+  emit.clusterTransfer.assign(n, 1.0f);
+  d.sources.push_back(emit);
+  std::vector<uint32_t> targets(n);
+  std::vector<float> weights(n, 1.0f / float(n));
+  for (uint32_t c = 0; c < n; ++c) targets[c] = c;
+  for (uint32_t r = 0; r < n; ++r) d.links.appendRow(targets.data(), weights.data(), n);
+  const float one = 1.0f;
+  for (uint32_t c = 0; c < n; ++c) d.clusterGather.appendRow(&c, &one, 1);
+  for (uint32_t t = 0; t < d.texelCount; ++t) {
+    const uint32_t p = t / 4;
+    d.texelGather.appendRow(&p, &one, 1);
+  }
+  EXPECT_EQ(d.validate(), "");
+  return d;
+}
+
+TEST(RuntimeSolver, WhiteFurnaceConvergesToAnalyticRadiance) {
+  for (float rho : {0.5f, 0.9f}) {
+    TransportData d = makeFurnace(8, rho, 1.0f);
+    Solver solver(d);
+    solver.solve({0, 1e-6f});
+    std::vector<glm::vec3> texels;
+    solver.gatherTexels(texels);
+    const float expected = 1.0f / (1.0f - rho);
+    for (const glm::vec3& t : texels) EXPECT_NEAR(t.y, expected, expected * 1e-4f) << "rho " << rho;
+  }
+}
+
+TEST(RuntimeSolver, FixedBounceCountGivesPartialGeometricSeries) {
+  const float rho = 0.5f;
+  TransportData d = makeFurnace(4, rho, 1.0f);
+  Solver solver(d);
+  std::vector<glm::vec3> texels;
+  solver.gatherTexels(texels);
+  EXPECT_NEAR(texels[0].x, 1.0f, 1e-6f);  // no pass yet: emission only
+  for (int bounces = 1; bounces <= 4; ++bounces) {
+    solver.iterate();
+    solver.gatherTexels(texels);
+    // After k passes: Le * (1 + rho + ... + rho^k).
+    float expected = (1.0f - std::pow(rho, float(bounces + 1))) / (1.0f - rho);
+    EXPECT_NEAR(texels[0].x, expected, 1e-5f) << bounces << " bounces";
+  }
+}
+
+TEST(RuntimeSolver, ConstantSkyOnUnoccludedTexelEqualsSkyRadiance) {
+  TransportData d;
+  d.texelCount = 1;
+  d.gatherPointCount = 1;
+  d.links.appendRow(nullptr, nullptr, 0);  // one gather point that sees no cluster
+  const uint32_t point = 0;
+  const float one = 1.0f;
+  d.texelGather.appendRow(&point, &one, 1);
+  // Transfer of an unoccluded, upward-facing point: only the DC term matters for a constant sky.
+  const float y00 = 1.0f / (2.0f * std::sqrt(3.14159265358979f));
+  d.texelSky.assign(kShCount, floatToHalf(0.0f));
+  d.texelSky[0] = floatToHalf(y00);
+  ASSERT_EQ(d.validate(), "");
+  constantSkySh(glm::vec3(0.3f, 0.6f, 1.2f), d.skySh);
+  Solver solver(d);
+  std::vector<glm::vec3> texels;
+  solver.gatherTexels(texels);
+  // The texels' sky transfer is kept in half floats: 2^-11 relative.
+  EXPECT_NEAR(texels[0].x, 0.3f, 0.3f / 2048.0f);
+  EXPECT_NEAR(texels[0].z, 1.2f, 1.2f / 2048.0f);
+}
+
+// Bounced light reaches texels through the smoothing between gather points and the texels'
+// interpolation of them, both linear maps applied as written.
+TEST(RuntimeSolver, GatherPointFilterAndTexelGatherApplyTheirWeights) {
+  TransportData d;
+  d.clusterCount = 2;
+  d.gatherPointCount = 2;
+  d.texelCount = 2;
+  d.materials.push_back({"grey", glm::vec3(0.5f), glm::vec3(0.0f)});
+  d.materials.push_back({"black", glm::vec3(0.0f), glm::vec3(0.0f)});
+  d.clusterMaterial = {0, 1};
+  d.clusterAlbedoTexture.assign(2, glm::vec3(1.0f));
+  d.clusterEmissionTexture.assign(2, glm::vec3(1.0f));
+  Source light;
+  light.name = "sun";
+  light.texelTransfer = {0.0f, 0.0f};
+  light.clusterTransfer = {1.0f, 0.0f};  // only cluster 0 is lit: R = (0.5, 0)
+  d.sources.push_back(light);
+  const uint32_t c0 = 0, c1 = 1, both[2] = {0, 1};
+  const float one = 1.0f, halves[2] = {0.5f, 0.5f}, mix[2] = {0.75f, 0.25f};
+  d.links.appendRow(&c0, &one, 1);  // point 0 sees cluster 0, point 1 the black cluster
+  d.links.appendRow(&c1, &one, 1);
+  d.clusterGather.appendRow(&c1, &one, 1);  // cluster 0 reads point 1: no feedback
+  d.clusterGather.appendRow(&c0, &one, 1);
+  d.pointFilter.appendRow(both, halves, 2);
+  d.pointFilter.appendRow(both, halves, 2);
+  d.texelGather.appendRow(&c0, &one, 1);
+  d.texelGather.appendRow(both, mix, 2);
+  ASSERT_EQ(d.validate(), "");
+  for (int passes : {0, 1}) {
+    d.filterPasses = passes;
+    Solver solver(d);
+    solver.solve();
+    std::vector<glm::vec3> direct, indirect;
+    solver.gatherTexels(direct, indirect);
+    // Gathered: V = (0.5, 0); one pass of the filter makes it (0.25, 0.25).
+    const float v0 = passes ? 0.25f : 0.5f, v1 = passes ? 0.25f : 0.0f;
+    EXPECT_FLOAT_EQ(indirect[0].x, v0) << passes;
+    EXPECT_FLOAT_EQ(indirect[1].x, 0.75f * v0 + 0.25f * v1) << passes;
+    EXPECT_EQ(direct[0], glm::vec3(0.0f));
+  }
+}
+
+}  // namespace
+}  // namespace afterglow::runtime

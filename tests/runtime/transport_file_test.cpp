@@ -1,0 +1,794 @@
+// The transport file (runtime/include/afterglow/runtime/transport_file.h): round trips, every
+// kind of damage a file can suffer, semantic checks through validate(), half floats, and the
+// load time of a Sponza-sized transport. Links afterglow_runtime alone (no baker).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "afterglow/runtime/transport_file.h"
+
+namespace afterglow::runtime {
+namespace {
+
+// ---- Synthetic transports --------------------------------------------------------------------
+
+// A small deterministic generator (the same numbers on every standard library).
+struct Rng {
+  uint64_t state;
+  uint32_t next() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return uint32_t(state >> 33);
+  }
+  uint32_t below(uint32_t n) { return n ? next() % n : 0; }
+  float unit() { return float(next() >> 8) / float(1u << 23); }
+};
+
+struct Shape {
+  uint32_t texels = 300, clusters = 40, points = 90, backRows = 5;
+  uint32_t linksPerRow = 12, texelGatherPerRow = 4;
+  int atlasSides[3][2] = {{16, 12}, {10, 10}, {7, 5}};
+  int lightsWithTexelTransfer = 2;
+};
+
+// Every field populated, and valid (validate() is empty).
+TransportData makeTransport(const Shape& s, uint64_t seed = 1) {
+  Rng rng{seed};
+  TransportData d;
+  d.texelCount = s.texels;
+  d.clusterCount = s.clusters;
+  d.gatherPointCount = s.points;
+
+  uint32_t nextTexel = 0;
+  for (const auto& side : s.atlasSides) {
+    AtlasLayout a;
+    a.width = side[0];
+    a.height = side[1];
+    const uint32_t pixels = uint32_t(a.width * a.height);
+    for (uint32_t p = 0; p < pixels; ++p)
+      a.texelOfPixel.push_back(rng.below(5) == 0 ? kNoTexel : (nextTexel++ % s.texels));
+    for (uint32_t p = 0; p < pixels; p += 1 + rng.below(7)) {
+      a.mixPixel.push_back(p);
+      const uint32_t n = rng.below(4);
+      for (uint32_t k = 0; k < n; ++k) {
+        a.mixTexel.push_back(rng.below(s.texels));
+        a.mixWeight.push_back(rng.unit());
+      }
+      a.mixStart.push_back(uint32_t(a.mixTexel.size()));
+    }
+    d.atlases.push_back(std::move(a));
+  }
+
+  d.materials.push_back({"floor", glm::vec3(0.5f, 0.6f, 0.7f), glm::vec3(0.0f)});
+  d.materials.push_back({"", glm::vec3(0.1f), glm::vec3(0.0f)});
+  d.materials.push_back({"Mörtel \xe2\x9c\x93", glm::vec3(0.9f, 0.2f, 0.3f), glm::vec3(4, 5, 6)});
+  d.materials.push_back({"lamp", glm::vec3(0.8f), glm::vec3(10.0f, 9.0f, 8.0f)});
+
+  for (int i = 0; i < 4; ++i) {
+    Source src;
+    src.name = i < 2 ? "light " + std::to_string(i) : d.materials[size_t(i)].name;
+    src.kind = i < 2 ? SourceKind::Light : SourceKind::Emissive;
+    src.material = i < 2 ? 0u : uint32_t(i);
+    src.color = glm::vec3(0.1f * float(i + 1), 0.5f, 1.0f - 0.2f * float(i));
+    src.intensity = 3.5f + float(i);
+    src.bounceIntensity = 0.25f * float(i + 1);
+    src.enabled = i != 1;
+    if (i < s.lightsWithTexelTransfer || i == 3)
+      for (uint32_t t = 0; t < s.texels; ++t) src.texelTransfer.push_back(rng.unit());
+    if (i != 2)
+      for (uint32_t c = 0; c < s.clusters; ++c) src.clusterTransfer.push_back(rng.unit());
+    d.sources.push_back(std::move(src));
+  }
+
+  for (uint32_t c = 0; c < s.clusters; ++c) {
+    d.clusterMaterial.push_back(rng.below(uint32_t(d.materials.size())));
+    d.clusterAlbedoTexture.push_back(glm::vec3(rng.unit(), rng.unit(), rng.unit()));
+    d.clusterEmissionTexture.push_back(glm::vec3(rng.unit(), rng.unit(), rng.unit()));
+  }
+
+  const uint32_t rows = s.points + s.backRows;
+  std::vector<uint32_t> targets;
+  std::vector<float> weights;
+  for (uint32_t r = 0; r < rows; ++r) {
+    targets.clear();
+    weights.clear();
+    const uint32_t n = rng.below(s.linksPerRow * 2 + 1);
+    uint32_t t = rng.below(3);
+    for (uint32_t k = 0; k < n && t < s.clusters; ++k, t += 1 + rng.below(4)) {
+      targets.push_back(t);
+      weights.push_back(0.01f + rng.unit());
+    }
+    d.links.appendRow(targets.data(), weights.data(), targets.size());
+  }
+
+  auto sparse = [&](SparseMatrix& m, uint32_t rowCount, uint32_t columns, uint32_t perRow) {
+    std::vector<uint32_t> cols;
+    std::vector<float> w;
+    for (uint32_t r = 0; r < rowCount; ++r) {
+      cols.clear();
+      w.clear();
+      const uint32_t n = rng.below(perRow * 2 + 1);
+      for (uint32_t k = 0; k < n; ++k) {
+        cols.push_back(rng.below(columns));
+        w.push_back(rng.unit());
+      }
+      m.appendRow(cols.data(), w.data(), cols.size());
+    }
+  };
+  sparse(d.clusterGather, s.clusters, rows, 3);
+  sparse(d.pointFilter, s.points, s.points, 4);
+  d.filterPasses = 2;
+  sparse(d.texelGather, s.texels, s.points, s.texelGatherPerRow);
+
+  for (uint32_t i = 0; i < s.texels * kShCount; ++i)
+    d.texelSky.push_back(floatToHalf(rng.unit() * 2.0f - 0.5f));
+  for (uint32_t i = 0; i < s.clusters * kShCount; ++i) d.clusterSky.push_back(rng.unit());
+
+  d.indirectIntensity = 1.5f;
+  d.albedoBoost = 1.25f;
+  for (int i = 0; i < kShCount; ++i) d.skySh[i] = glm::vec3(0.1f * float(i), -0.2f, 0.3f + float(i));
+  return d;
+}
+
+void expectSparseEqual(const SparseMatrix& a, const SparseMatrix& b, const char* what) {
+  EXPECT_EQ(a.rowStart, b.rowStart) << what;
+  EXPECT_EQ(a.column, b.column) << what;
+  EXPECT_EQ(a.weight, b.weight) << what;
+}
+
+void expectEqual(const TransportData& a, const TransportData& b) {
+  EXPECT_EQ(a.texelCount, b.texelCount);
+  EXPECT_EQ(a.clusterCount, b.clusterCount);
+  EXPECT_EQ(a.gatherPointCount, b.gatherPointCount);
+  ASSERT_EQ(a.atlases.size(), b.atlases.size());
+  for (size_t i = 0; i < a.atlases.size(); ++i) {
+    SCOPED_TRACE("atlas " + std::to_string(i));
+    const AtlasLayout &x = a.atlases[i], &y = b.atlases[i];
+    EXPECT_EQ(x.width, y.width);
+    EXPECT_EQ(x.height, y.height);
+    EXPECT_EQ(x.texelOfPixel, y.texelOfPixel);
+    EXPECT_EQ(x.mixPixel, y.mixPixel);
+    EXPECT_EQ(x.mixStart, y.mixStart);
+    EXPECT_EQ(x.mixTexel, y.mixTexel);
+    EXPECT_EQ(x.mixWeight, y.mixWeight);
+  }
+  ASSERT_EQ(a.materials.size(), b.materials.size());
+  for (size_t i = 0; i < a.materials.size(); ++i) {
+    EXPECT_EQ(a.materials[i].name, b.materials[i].name);
+    EXPECT_EQ(a.materials[i].albedo, b.materials[i].albedo);
+    EXPECT_EQ(a.materials[i].emission, b.materials[i].emission);
+  }
+  ASSERT_EQ(a.sources.size(), b.sources.size());
+  for (size_t i = 0; i < a.sources.size(); ++i) {
+    SCOPED_TRACE("source " + std::to_string(i));
+    const Source &x = a.sources[i], &y = b.sources[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.kind, y.kind);
+    EXPECT_EQ(x.material, y.material);
+    EXPECT_EQ(x.color, y.color);
+    EXPECT_EQ(x.intensity, y.intensity);
+    EXPECT_EQ(x.bounceIntensity, y.bounceIntensity);
+    EXPECT_EQ(x.enabled, y.enabled);
+    EXPECT_EQ(x.texelTransfer, y.texelTransfer);
+    EXPECT_EQ(x.clusterTransfer, y.clusterTransfer);
+  }
+  EXPECT_EQ(a.clusterMaterial, b.clusterMaterial);
+  EXPECT_EQ(a.clusterAlbedoTexture, b.clusterAlbedoTexture);
+  EXPECT_EQ(a.clusterEmissionTexture, b.clusterEmissionTexture);
+  EXPECT_EQ(a.links.rowStart, b.links.rowStart);
+  EXPECT_EQ(a.links.target, b.links.target);
+  EXPECT_EQ(a.links.weight, b.links.weight);
+  EXPECT_EQ(a.links.rowScale, b.links.rowScale);
+  expectSparseEqual(a.clusterGather, b.clusterGather, "cluster gather");
+  expectSparseEqual(a.pointFilter, b.pointFilter, "point filter");
+  EXPECT_EQ(a.filterPasses, b.filterPasses);
+  expectSparseEqual(a.texelGather, b.texelGather, "texel gather");
+  EXPECT_EQ(a.texelSky, b.texelSky);
+  EXPECT_EQ(a.clusterSky, b.clusterSky);
+  EXPECT_EQ(a.indirectIntensity, b.indirectIntensity);
+  EXPECT_EQ(a.albedoBoost, b.albedoBoost);
+  for (int i = 0; i < kShCount; ++i) EXPECT_EQ(a.skySh[i], b.skySh[i]) << "sky SH " << i;
+}
+
+bool isEmpty(const TransportData& d) {
+  return d.texelCount == 0 && d.clusterCount == 0 && d.atlases.empty() && d.sources.empty() &&
+         d.materials.empty() && d.links.target.empty() && d.texelSky.empty();
+}
+
+// ---- File surgery ----------------------------------------------------------------------------
+
+uint64_t get64(const std::vector<uint8_t>& f, size_t at) {
+  uint64_t v;
+  std::memcpy(&v, f.data() + at, 8);
+  return v;
+}
+uint32_t get32(const std::vector<uint8_t>& f, size_t at) {
+  uint32_t v;
+  std::memcpy(&v, f.data() + at, 4);
+  return v;
+}
+void put64(std::vector<uint8_t>& f, size_t at, uint64_t v) { std::memcpy(f.data() + at, &v, 8); }
+void put32(std::vector<uint8_t>& f, size_t at, uint32_t v) { std::memcpy(f.data() + at, &v, 4); }
+
+// Recomputes the checksum after a deliberate change.
+void reseal(std::vector<uint8_t>& f) { put64(f, 32, transportChecksum(f.data(), f.size())); }
+
+struct Section {
+  std::string id;
+  uint64_t count = 0;
+  std::vector<uint8_t> payload;
+};
+
+// The sections of a file, in table order.
+std::vector<Section> split(const std::vector<uint8_t>& f) {
+  std::vector<Section> sections;
+  const uint32_t n = get32(f, 24);
+  for (uint32_t i = 0; i < n; ++i) {
+    const size_t e = kTransportHeaderSize + size_t(i) * 32;
+    Section s;
+    s.id.assign(reinterpret_cast<const char*>(f.data() + e), 4);
+    const uint64_t offset = get64(f, e + 8), size = get64(f, e + 16);
+    s.count = get64(f, e + 24);
+    s.payload.assign(f.begin() + long(offset), f.begin() + long(offset + size));
+    sections.push_back(std::move(s));
+  }
+  return sections;
+}
+
+// A well-formed file of these sections (layout as the writer's).
+std::vector<uint8_t> join(const std::vector<Section>& sections) {
+  auto align = [](size_t x) { return (x + 15) & ~size_t(15); };
+  std::vector<uint8_t> f(kTransportHeaderSize + sections.size() * 32, 0);
+  std::memcpy(f.data(), kTransportMagic, 8);
+  put32(f, 8, kTransportVersion);
+  put32(f, 12, kTransportHeaderSize);
+  put32(f, 24, uint32_t(sections.size()));
+  for (size_t i = 0; i < sections.size(); ++i) {
+    f.resize(align(f.size()), 0);
+    const size_t e = kTransportHeaderSize + i * 32;
+    std::memcpy(f.data() + e, sections[i].id.data(), 4);
+    put64(f, e + 8, f.size());
+    put64(f, e + 16, sections[i].payload.size());
+    put64(f, e + 24, sections[i].count);
+    f.insert(f.end(), sections[i].payload.begin(), sections[i].payload.end());
+  }
+  f.resize(align(f.size()), 0);
+  put64(f, 16, f.size());
+  reseal(f);
+  return f;
+}
+
+Section* find(std::vector<Section>& sections, const std::string& id) {
+  for (Section& s : sections)
+    if (s.id == id) return &s;
+  return nullptr;
+}
+
+std::string parseError(const std::vector<uint8_t>& f, bool verifyChecksum = true) {
+  TransportData out;  // something for a failed parse to clear
+  out.texelCount = 5;
+  out.atlases.resize(1);
+  out.sources.resize(1);
+  out.texelSky.resize(3);
+  std::string error;
+  ParseOptions options;
+  options.verifyChecksum = verifyChecksum;
+  if (parseTransport(f.data(), f.size(), out, &error, options)) return "(parsed)";
+  EXPECT_TRUE(isEmpty(out)) << "a failed parse left data behind";
+  EXPECT_FALSE(error.empty());
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+  return error;
+}
+
+std::string tempPath(const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "afterglow_runtime_tests";
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+// ---- Tests -----------------------------------------------------------------------------------
+
+TEST(TransportFile, Xxh64MatchesTheReference) {
+  // Values from the reference xxHash library (XXH64).
+  EXPECT_EQ(xxh64("", 0, 0), 0xEF46DB3751D8E999ull);
+  EXPECT_EQ(xxh64("a", 1, 0), 0xD24EC4F1A98C6E5Bull);
+  EXPECT_EQ(xxh64("abc", 3, 0), 0x44BC2CF5AD770999ull);
+  EXPECT_EQ(xxh64("abc", 3, 0x9E3779B97F4A7C15ull), 0x2ED0F59D6B43AC8Bull);
+  std::vector<uint8_t> bytes;
+  for (int r = 0; r < 4; ++r)
+    for (int i = 0; i < 256; ++i) bytes.push_back(uint8_t(i));
+  bytes.insert(bytes.end(), {'x', 'y', 'z'});
+  EXPECT_EQ(xxh64(bytes.data(), bytes.size(), 0), 0xE146CB31B65BC21Aull);
+  EXPECT_EQ(xxh64(bytes.data(), bytes.size(), 0x9E3779B97F4A7C15ull), 0x86B7211D04E93C1Full);
+}
+
+TEST(TransportFile, TransportDataHasNoFieldTheFileMisses) {
+  // The sizes with libstdc++ on 64-bit when this file format was written. A failure means a
+  // field was added: serialise it (transport_file.cpp) and compare it in expectEqual() above.
+#if defined(__GLIBCXX__) && UINTPTR_MAX == 0xffffffffffffffffull
+  EXPECT_EQ(sizeof(TransportData), 648u);
+  EXPECT_EQ(sizeof(AtlasLayout), 128u);
+  EXPECT_EQ(sizeof(Source), 112u);
+  EXPECT_EQ(sizeof(MaterialParams), 56u);
+#else
+  GTEST_SKIP() << "sizes recorded for libstdc++ on 64-bit only";
+#endif
+}
+
+TEST(TransportFile, RoundTripKeepsEveryField) {
+  const TransportData data = makeTransport(Shape());
+  ASSERT_EQ(data.validate(), "");
+  const std::vector<uint8_t> bytes = serializeTransport(data);
+  EXPECT_EQ(bytes.size() % 16, 0u);
+  EXPECT_EQ(get64(bytes, 16), bytes.size());
+
+  TransportData parsed;
+  std::string error;
+  ASSERT_TRUE(parseTransport(bytes.data(), bytes.size(), parsed, &error)) << error;
+  expectEqual(data, parsed);
+  // Writing what was read gives the same bytes.
+  EXPECT_EQ(serializeTransport(parsed), bytes);
+
+  // Through a file.
+  const std::string path = tempPath("roundtrip.agt");
+  ASSERT_TRUE(saveTransport(data, path, &error)) << error;
+  TransportData loaded;
+  ASSERT_TRUE(loadTransport(path, loaded, &error)) << error;
+  expectEqual(data, loaded);
+  std::filesystem::remove(path);
+}
+
+TEST(TransportFile, RoundTripOfAnEmptyTransport) {
+  const TransportData empty;
+  ASSERT_EQ(empty.validate(), "");
+  const std::vector<uint8_t> bytes = serializeTransport(empty);
+  TransportData parsed = makeTransport(Shape());
+  std::string error;
+  ASSERT_TRUE(parseTransport(bytes.data(), bytes.size(), parsed, &error)) << error;
+  expectEqual(empty, parsed);
+}
+
+TEST(TransportFile, ArraysStartSixteenByteAligned) {
+  const std::vector<uint8_t> bytes = serializeTransport(makeTransport(Shape()));
+  const uint32_t sections = get32(bytes, 24);
+  for (uint32_t i = 0; i < sections; ++i) {
+    const size_t e = kTransportHeaderSize + i * 32;
+    EXPECT_EQ(get64(bytes, e + 8) % 16, 0u) << "section " << i;
+  }
+  // TSKY is one array: its u64 count at the section start, its data 16 bytes further.
+  std::vector<Section> split_ = split(bytes);
+  const Section* sky = find(split_, "TSKY");
+  ASSERT_NE(sky, nullptr);
+  EXPECT_EQ(sky->count, uint64_t(300 * kShCount));
+  EXPECT_EQ(sky->payload.size(), 16u + 300 * kShCount * 2);
+}
+
+TEST(TransportFile, EveryTruncationFails) {
+  Shape small;
+  small.texels = 20;
+  small.clusters = 6;
+  small.points = 8;
+  small.backRows = 2;
+  small.atlasSides[0][0] = 3;
+  small.atlasSides[0][1] = 4;
+  small.atlasSides[1][0] = 2;
+  small.atlasSides[1][1] = 2;
+  small.atlasSides[2][0] = 5;
+  small.atlasSides[2][1] = 1;
+  const std::vector<uint8_t> bytes = serializeTransport(makeTransport(small));
+  ASSERT_LT(bytes.size(), 20000u);
+  // Where the last section's payload ends: a cut past it only drops padding.
+  uint64_t lastEnd = 0;
+  for (uint32_t i = 0; i < get32(bytes, 24); ++i) {
+    const size_t e = kTransportHeaderSize + i * 32;
+    lastEnd = std::max(lastEnd, get64(bytes, e + 8) + get64(bytes, e + 16));
+  }
+  for (size_t n = 0; n < bytes.size(); ++n) {
+    std::vector<uint8_t> cut(bytes.begin(), bytes.begin() + long(n));
+    const std::string error = parseError(cut);
+    if (n >= 8) {
+      EXPECT_EQ(error.rfind("truncated: the file has " + std::to_string(n) + " bytes", 0), 0u)
+          << error;
+    }
+    EXPECT_NE(parseError(cut, false), "(parsed)") << n;
+    // The same cut with its header saying so and a fresh checksum reaches the section checks.
+    if (n >= kTransportHeaderSize) {
+      put64(cut, 16, n);
+      reseal(cut);
+      const std::string resealed = parseError(cut);
+      if (n < lastEnd) {
+        EXPECT_NE(resealed, "(parsed)") << "cut at " << n;
+      }
+    }
+  }
+}
+
+TEST(TransportFile, DamagedHeaderBytesAreCaught) {
+  const std::vector<uint8_t> bytes = serializeTransport(makeTransport(Shape()));
+  for (size_t i = 0; i < kTransportHeaderSize; ++i)
+    for (uint8_t mask : {uint8_t(0x01), uint8_t(0x10), uint8_t(0x80), uint8_t(0xff)}) {
+      std::vector<uint8_t> f = bytes;
+      f[i] ^= mask;
+      const std::string error = parseError(f);
+      SCOPED_TRACE("byte " + std::to_string(i) + " ^ " + std::to_string(mask) + ": " + error);
+      std::string expected;
+      if (i < 8) {
+        expected = "not an afterglow transport file";
+      } else if (i < 12) {
+        expected = "version ";
+      } else if (i < 16) {
+        expected = "header size ";
+      } else if (i < 24) {
+        expected = get64(f, 16) > f.size() ? "truncated: " : "size mismatch: ";
+      } else {
+        expected = "checksum mismatch: the file is corrupted";
+      }
+      EXPECT_EQ(error.rfind(expected, 0), 0u);
+      // Without the checksum, the structure still gives damage away (bytes 32..39 are the
+      // checksum itself, which is then not looked at).
+      if (i < 32) {
+        EXPECT_NE(parseError(f, false), "(parsed)");
+      }
+    }
+}
+
+TEST(TransportFile, DamagedPayloadBytesAreCaught) {
+  const std::vector<uint8_t> bytes = serializeTransport(makeTransport(Shape()));
+  Rng rng{7};
+  int structural = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    std::vector<uint8_t> f = bytes;
+    const size_t at = kTransportHeaderSize + rng.below(uint32_t(f.size() - kTransportHeaderSize));
+    f[at] ^= uint8_t(1 + rng.below(255));
+    EXPECT_EQ(parseError(f), "checksum mismatch: the file is corrupted") << "byte " << at;
+    // Without the checksum, never a crash; damage to the table or a count is caught.
+    if (parseError(f, false) != "(parsed)") ++structural;
+  }
+  EXPECT_GT(structural, 0);
+  // The table is all structure: any change there is refused even without the checksum.
+  for (size_t at = kTransportHeaderSize; at < kTransportHeaderSize + 11 * 32; ++at) {
+    std::vector<uint8_t> f = bytes;
+    f[at] ^= 0x40;
+    EXPECT_NE(parseError(f, false), "(parsed)") << "table byte " << at;
+  }
+}
+
+TEST(TransportFile, WrongMagicAndVersionSaySo) {
+  std::vector<uint8_t> bytes = serializeTransport(makeTransport(Shape()));
+  std::vector<uint8_t> png = bytes;
+  std::memcpy(png.data(), "\x89PNG\r\n\x1a\n", 8);
+  EXPECT_EQ(parseError(png), "not an afterglow transport file");
+  EXPECT_EQ(parseError(std::vector<uint8_t>{'{', '}'}), "not an afterglow transport file");
+  EXPECT_EQ(parseError(std::vector<uint8_t>{}), "not an afterglow transport file");
+
+  std::vector<uint8_t> v2 = bytes;
+  put32(v2, 8, 2);
+  reseal(v2);
+  EXPECT_EQ(parseError(v2), "version 2; this runtime reads version 1: re-bake with this afterglow");
+
+  std::vector<uint8_t> longer = bytes;
+  longer.resize(bytes.size() + 16, 0);
+  EXPECT_EQ(parseError(longer), "size mismatch: the file has " + std::to_string(longer.size()) +
+                                    " bytes, its header says " + std::to_string(bytes.size()));
+  std::vector<uint8_t> shorter(bytes.begin(), bytes.end() - 100);
+  EXPECT_EQ(parseError(shorter), "truncated: the file has " + std::to_string(shorter.size()) +
+                                     " bytes, its header says " + std::to_string(bytes.size()));
+}
+
+TEST(TransportFile, SectionTableRules) {
+  const TransportData data = makeTransport(Shape());
+  const std::vector<uint8_t> bytes = serializeTransport(data);
+  const std::vector<Section> sections = split(bytes);
+  ASSERT_EQ(sections.size(), 11u);
+  // join() rebuilds the writer's layout exactly.
+  EXPECT_EQ(join(sections), bytes);
+
+  // An unknown section (a later writer's) is skipped, wherever it sits.
+  {
+    std::vector<Section> s = sections;
+    s.insert(s.begin() + 3, Section{"XTRA", 5, std::vector<uint8_t>(37, 0xab)});
+    s.push_back(Section{"zzzz", 0, {}});
+    const std::vector<uint8_t> f = join(s);
+    TransportData parsed;
+    std::string error;
+    ASSERT_TRUE(parseTransport(f.data(), f.size(), parsed, &error)) << error;
+    expectEqual(data, parsed);
+  }
+  for (const Section& gone : sections) {
+    std::vector<Section> s;
+    for (const Section& k : sections)
+      if (k.id != gone.id) s.push_back(k);
+    EXPECT_EQ(parseError(join(s)), "missing section '" + gone.id + "'");
+  }
+  {
+    std::vector<Section> s = sections;
+    s.push_back(*find(s, "LINK"));
+    EXPECT_EQ(parseError(join(s)), "section 'LINK' appears twice");
+  }
+  {
+    std::vector<Section> s = sections;
+    find(s, "TGAT")->count += 1;
+    EXPECT_EQ(parseError(join(s)), "section 'TGAT': the table says 301 rows, the section has 300");
+  }
+  {
+    std::vector<Section> s = sections;
+    find(s, "CSKY")->payload.push_back(0);
+    EXPECT_EQ(parseError(join(s)), "section 'CSKY': 1 bytes left over");
+  }
+  {
+    // A count far beyond the section: refused before anything is allocated.
+    std::vector<Section> s = sections;
+    std::vector<uint8_t>& p = find(s, "TSKY")->payload;
+    const uint64_t huge = uint64_t(1) << 60;
+    std::memcpy(p.data(), &huge, 8);
+    const std::string error = parseError(join(s));
+    EXPECT_EQ(error.rfind("section 'TSKY': texel sky transfer: 1152921504606846976 values", 0), 0u)
+        << error;
+  }
+  {
+    std::vector<Section> s = sections;
+    find(s, "ATLS")->count = uint64_t(1) << 40;
+    const std::string error = parseError(join(s));
+    EXPECT_NE(error.find("atlases cannot fit"), std::string::npos) << error;
+  }
+  {
+    // Offsets that overlap or leave the file.
+    std::vector<uint8_t> f = bytes;
+    const size_t second = kTransportHeaderSize + 32;
+    put64(f, second + 8, get64(f, kTransportHeaderSize + 8));
+    reseal(f);
+    EXPECT_NE(parseError(f).find("overlaps the section before it"), std::string::npos);
+    f = bytes;
+    put64(f, second + 16, uint64_t(-16));
+    reseal(f);
+    EXPECT_NE(parseError(f).find("outside the file"), std::string::npos);
+    f = bytes;
+    put64(f, second + 8, get64(f, second + 8) + 8);
+    reseal(f);
+    EXPECT_NE(parseError(f).find("not a multiple of 16"), std::string::npos);
+    f = bytes;
+    put32(f, 24, 0xffffffffu);
+    reseal(f);
+    EXPECT_NE(parseError(f).find("section table: 4294967295 sections"), std::string::npos);
+  }
+}
+
+TEST(TransportFile, BadIndicesAreRefusedByValidate) {
+  const TransportData good = makeTransport(Shape());
+  auto errorOf = [](const TransportData& d) {
+    EXPECT_NE(d.validate(), "");
+    return parseError(serializeTransport(d));
+  };
+  {
+    TransportData d = good;
+    ASSERT_FALSE(d.links.target.empty());
+    d.links.target.back() = d.clusterCount;
+    const std::string error = errorOf(d);
+    EXPECT_EQ(error.rfind("section 'LINK': links: entry ", 0), 0u) << error;
+  }
+  {
+    TransportData d = good;
+    ASSERT_FALSE(d.texelGather.column.empty());
+    d.texelGather.column[0] = d.gatherPointCount + 7;
+    const std::string error = errorOf(d);
+    EXPECT_EQ(error.rfind("section 'TGAT': texel gather: entry 0 refers to ", 0), 0u) << error;
+  }
+  {
+    TransportData d = good;
+    d.atlases[1].texelOfPixel[3] = d.texelCount;
+    const std::string error = errorOf(d);
+    EXPECT_EQ(error, "section 'ATLS': atlas 1: a pixel refers to texel 300 of 300");
+  }
+  {
+    TransportData d = good;
+    d.clusterMaterial[2] = 99;
+    EXPECT_EQ(errorOf(d), "section 'CLUS': cluster 2 uses material 99 of 4");
+  }
+  {
+    TransportData d = good;
+    d.sources[3].material = 4;
+    EXPECT_EQ(errorOf(d).rfind("section 'SRCS': source 3 ('lamp')", 0), 0u);
+  }
+  {
+    TransportData d = good;
+    d.texelSky.pop_back();
+    EXPECT_EQ(errorOf(d).rfind("section 'TSKY': ", 0), 0u);
+  }
+  {
+    // Row offsets that are not even there: refused by the reader (validate() assumes at least
+    // the first offset).
+    TransportData d = good;
+    d.pointFilter.rowStart.clear();
+    d.pointFilter.column.clear();
+    d.pointFilter.weight.clear();
+    EXPECT_EQ(parseError(serializeTransport(d)),
+              "section 'PFLT': row offsets: no row offsets (not even the first 0)");
+  }
+  {
+    TransportData d = good;
+    d.filterPasses = 5000;
+    EXPECT_EQ(parseError(serializeTransport(d)),
+              "section 'INFO': filter passes 5000 outside [0, 1024]");
+  }
+  {
+    // An unknown source kind byte.
+    std::vector<Section> s = split(serializeTransport(good));
+    std::vector<uint8_t>& p = find(s, "SRCS")->payload;
+    const uint32_t nameLength = get32(p, 0);
+    p[4 + nameLength] = 7;
+    EXPECT_EQ(parseError(join(s)), "section 'SRCS': source 0: unknown kind 7");
+  }
+}
+
+TEST(TransportFile, SaveRefusesInvalidDataAndBadPaths) {
+  TransportData d = makeTransport(Shape());
+  d.links.target[0] = 1000;
+  std::string error;
+  const std::string path = tempPath("invalid.agt");
+  EXPECT_FALSE(saveTransport(d, path, &error));
+  EXPECT_EQ(error.rfind(path + ": not saved, the transport is invalid: links: ", 0), 0u) << error;
+  EXPECT_FALSE(std::filesystem::exists(path));
+
+  const std::string nowhere = "/nonexistent-afterglow-dir/transport.agt";
+  EXPECT_FALSE(saveTransport(makeTransport(Shape()), nowhere, &error));
+  EXPECT_EQ(error.rfind(nowhere + ": ", 0), 0u) << error;
+}
+
+TEST(TransportFile, LoadErrorsNameThePath) {
+  TransportData out = makeTransport(Shape());
+  std::string error;
+  const std::string missing = tempPath("does-not-exist.agt");
+  EXPECT_FALSE(loadTransport(missing, out, &error));
+  EXPECT_TRUE(isEmpty(out));
+  EXPECT_EQ(error.rfind(missing + ": ", 0), 0u) << error;
+  EXPECT_NE(error.find("No such file"), std::string::npos) << error;
+
+  // A corrupted file on disk.
+  std::vector<uint8_t> bytes = serializeTransport(makeTransport(Shape()));
+  bytes[bytes.size() / 2] ^= 1;
+  const std::string path = tempPath("corrupt.agt");
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  ASSERT_EQ(std::fwrite(bytes.data(), 1, bytes.size(), f), bytes.size());
+  std::fclose(f);
+  EXPECT_FALSE(loadTransport(path, out, &error));
+  EXPECT_EQ(error, path + ": checksum mismatch: the file is corrupted");
+
+  // A folder.
+  EXPECT_FALSE(loadTransport(std::filesystem::temp_directory_path().string(), out, &error));
+  EXPECT_EQ(error.rfind(std::filesystem::temp_directory_path().string() + ": ", 0), 0u);
+  std::filesystem::remove(path);
+}
+
+// ---- Half floats -----------------------------------------------------------------------------
+
+bool isNanHalf(uint16_t h) { return (h & 0x7c00u) == 0x7c00u && (h & 0x3ffu) != 0; }
+
+TEST(HalfFloat, EveryHalfRoundTrips) {
+  for (uint32_t bits = 0; bits < 65536; ++bits) {
+    const uint16_t h = uint16_t(bits);
+    const float f = halfToFloat(h);
+    if (isNanHalf(h)) {
+      EXPECT_TRUE(std::isnan(f)) << bits;
+      const uint16_t back = floatToHalf(f);
+      EXPECT_TRUE(isNanHalf(back)) << bits;
+      EXPECT_EQ(back & 0x8000u, h & 0x8000u) << bits;
+    } else {
+      ASSERT_EQ(floatToHalf(f), h) << "half " << bits << " = " << f;
+    }
+  }
+}
+
+TEST(HalfFloat, KnownValues) {
+  EXPECT_EQ(floatToHalf(0.0f), 0x0000);
+  EXPECT_EQ(floatToHalf(-0.0f), 0x8000);
+  EXPECT_EQ(floatToHalf(1.0f), 0x3c00);
+  EXPECT_EQ(floatToHalf(-2.0f), 0xc000);
+  EXPECT_EQ(floatToHalf(0.5f), 0x3800);
+  EXPECT_EQ(floatToHalf(65504.0f), 0x7bff);  // largest finite half
+  EXPECT_FLOAT_EQ(halfToFloat(0x3555), 0.333251953125f);
+  // Ties to even: 1 + 2^-11 is halfway between 1 and 1 + 2^-10.
+  EXPECT_EQ(floatToHalf(1.0f + std::ldexp(1.0f, -11)), 0x3c00);
+  EXPECT_EQ(floatToHalf(1.0f + 3.0f * std::ldexp(1.0f, -11)), 0x3c02);
+  EXPECT_EQ(floatToHalf(std::nextafter(1.0f + std::ldexp(1.0f, -11), 2.0f)), 0x3c01);
+  // Overflow: 65520 is halfway to 65536 (Inf) and rounds up to even; everything beyond is Inf.
+  EXPECT_EQ(floatToHalf(65519.0f), 0x7bff);
+  EXPECT_EQ(floatToHalf(65520.0f), 0x7c00);
+  EXPECT_EQ(floatToHalf(1e9f), 0x7c00);
+  EXPECT_EQ(floatToHalf(-1e30f), 0xfc00);
+  EXPECT_EQ(floatToHalf(std::numeric_limits<float>::infinity()), 0x7c00);
+  EXPECT_EQ(floatToHalf(-std::numeric_limits<float>::infinity()), 0xfc00);
+  EXPECT_TRUE(isNanHalf(floatToHalf(std::numeric_limits<float>::quiet_NaN())));
+  // Subnormals: 2^-24 is the smallest; half of it ties to 0; 2^-14 is the smallest normal.
+  EXPECT_EQ(floatToHalf(std::ldexp(1.0f, -24)), 0x0001);
+  EXPECT_EQ(floatToHalf(std::ldexp(1.0f, -25)), 0x0000);
+  EXPECT_EQ(floatToHalf(std::nextafter(std::ldexp(1.0f, -25), 1.0f)), 0x0001);
+  EXPECT_EQ(floatToHalf(3.0f * std::ldexp(1.0f, -25)), 0x0002);
+  EXPECT_EQ(floatToHalf(std::ldexp(1.0f, -14)), 0x0400);
+  EXPECT_EQ(floatToHalf(std::ldexp(1.0f, -14) - std::ldexp(1.0f, -25)), 0x0400);  // tie → even
+  EXPECT_EQ(floatToHalf(std::ldexp(1.0f, -30)), 0x0000);
+  EXPECT_EQ(floatToHalf(-std::ldexp(1.0f, -30)), 0x8000);
+  EXPECT_EQ(halfToFloat(0x0001), std::ldexp(1.0f, -24));
+  EXPECT_EQ(halfToFloat(0x03ff), std::ldexp(1023.0f, -24));
+}
+
+TEST(HalfFloat, EveryMidpointRoundsToNearestEven) {
+  // Between each two neighbouring finite halves (and from 65504 to the Inf boundary 65536):
+  // the exact midpoint goes to the even one, anything off it to the nearer one.
+  for (uint32_t sign : {0u, 0x8000u})
+    for (uint32_t bits = 0; bits < 0x7c00u; ++bits) {
+      const uint16_t a = uint16_t(sign | bits), b = uint16_t(sign | (bits + 1));
+      const float fa = halfToFloat(a);
+      const float fb = bits + 1 == 0x7c00u ? (sign ? -65536.0f : 65536.0f) : halfToFloat(b);
+      const float mid = 0.5f * (fa + fb);  // exact: a half has 11 significant bits
+      ASSERT_EQ(floatToHalf(mid), (a & 1u) ? b : a) << "between " << fa << " and " << fb;
+      ASSERT_EQ(floatToHalf(std::nextafter(mid, fa)), a) << "below " << mid;
+      ASSERT_EQ(floatToHalf(std::nextafter(mid, fb)), b) << "above " << mid;
+    }
+}
+
+// ---- Size of a real level --------------------------------------------------------------------
+
+TEST(TransportFile, LargeTransportSavesAndLoadsQuickly) {
+  // About the size of Sponza's transport (~80 MB): informational timings, no assertion on them.
+  Shape big;
+  big.texels = 600000;
+  big.clusters = 15000;
+  big.points = 190000;
+  big.backRows = 4000;
+  big.linksPerRow = 20;
+  big.texelGatherPerRow = 4;
+  big.atlasSides[0][0] = big.atlasSides[0][1] = 1024;
+  big.atlasSides[1][0] = 512;
+  big.atlasSides[1][1] = 256;
+  big.atlasSides[2][0] = big.atlasSides[2][1] = 64;
+  const TransportData data = makeTransport(big);
+  ASSERT_EQ(data.validate(), "");
+
+  using Clock = std::chrono::steady_clock;
+  auto ms = [](Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  const std::string path = tempPath("large.agt");
+  std::string error;
+  const auto t0 = Clock::now();
+  ASSERT_TRUE(saveTransport(data, path, &error)) << error;
+  const auto t1 = Clock::now();
+  TransportData loaded;
+  ASSERT_TRUE(loadTransport(path, loaded, &error)) << error;
+  const auto t2 = Clock::now();
+  const double mb = double(std::filesystem::file_size(path)) / 1e6;
+  // In memory, without the disk: serialising, then parsing.
+  const auto t2b = Clock::now();
+  std::vector<uint8_t> bytes = serializeTransport(data);
+  const auto t3 = Clock::now();
+  TransportData parsed;
+  ASSERT_TRUE(parseTransport(bytes.data(), bytes.size(), parsed, &error)) << error;
+  const auto t4 = Clock::now();
+  const auto t5 = Clock::now();
+  const uint64_t checksum = transportChecksum(bytes.data(), bytes.size());
+  const auto t6 = Clock::now();
+  EXPECT_EQ(parsed.validate(), "");
+  const auto t7 = Clock::now();
+  std::printf(
+      "[ transport ] %.1f MB: save %.1f ms (%.0f MB/s), load %.1f ms (%.0f MB/s); in memory: "
+      "serialise %.1f ms, parse %.1f ms (%.0f MB/s; of which checksum %.1f ms, validate() "
+      "%.1f ms) [%016llx]\n",
+      mb, ms(t1 - t0), mb / ms(t1 - t0) * 1e3, ms(t2 - t1), mb / ms(t2 - t1) * 1e3,
+      ms(t3 - t2b), ms(t4 - t3), mb / ms(t4 - t3) * 1e3, ms(t6 - t5), ms(t7 - t6),
+      (unsigned long long)checksum);
+  RecordProperty("file_mb", std::to_string(mb));
+  RecordProperty("save_ms", std::to_string(ms(t1 - t0)));
+  RecordProperty("load_ms", std::to_string(ms(t2 - t1)));
+  EXPECT_GT(mb, 70.0);
+  expectEqual(data, loaded);
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace afterglow::runtime
