@@ -33,5 +33,6 @@ const char* mark(bool ok);
 int benchUv(int argc, char** argv);
 int benchAccuracy(int argc, char** argv);
 int benchBake(int argc, char** argv);
+int benchRuntime(int argc, char** argv);
 
 }  // namespace afterglow::bench

@@ -2,6 +2,7 @@
 // build). One subcommand per capability:
 //   afterglow_bench uv [SCENE] [--texels-per-unit 16] [--threads 2]
 //   afterglow_bench bake [--threads 2] [--cornell-only | --sponza-only]
+//   afterglow_bench runtime [--cornell-only | --sponza-only] [--repeat N]
 //   afterglow_bench accuracy [SCENE] [--texels-per-unit N] [--spp N] [--stride N] ...
 #include <cstdio>
 #include <cstring>
@@ -14,10 +15,12 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "uv") == 0) return benchUv(argc, argv);
   if (std::strcmp(command, "accuracy") == 0) return benchAccuracy(argc, argv);
   if (std::strcmp(command, "bake") == 0) return benchBake(argc, argv);
+  if (std::strcmp(command, "runtime") == 0) return benchRuntime(argc, argv);
   std::fprintf(stderr,
-               "usage: afterglow_bench uv|bake|accuracy [options]\n"
+               "usage: afterglow_bench uv|bake|runtime|accuracy [options]\n"
                "  uv        lightmap UVs of Sponza: utilisation, stretch, time (issue 2)\n"
                "  bake      bake time, accuracy, ray throughput, memory (issue 3)\n"
+               "  runtime   transport size and load, bounce and update times, one thread (issue 4)\n"
                "  accuracy  a bake against the reference path tracer (Cornell box)\n");
   return 2;
 }

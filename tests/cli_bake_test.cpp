@@ -131,7 +131,7 @@ TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
   const std::string out = bakedCornell();
   const std::vector<std::string> files = tree(out);
   const std::vector<std::string> expected = {"lightmaps/lightmap0.exr", "lightmaps/lightmap0.png",
-                                             "report.json", "scene.bin", "scene.gltf"};
+                                             "report.json", "scene.bin", "scene.gltf", "transport.agt"};
   EXPECT_EQ(files, expected);
 
   const json report = json::parse(slurp(out + "/report.json"));
@@ -145,6 +145,8 @@ TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
   EXPECT_LE(points, report.at("validTexels").get<size_t>());
   EXPECT_GE(points, report.at("validTexels").get<size_t>() / 4);
   EXPECT_GT(report.at("links").get<size_t>(), points);
+  // The transport for the runtime: the report gives its size, the file has it.
+  EXPECT_EQ(report.at("transport").at("bytes").get<uintmax_t>(), fs::file_size(out + "/transport.agt"));
   EXPECT_GT(report.at("raysTraced").get<uint64_t>(), points * 64);  // draft: 64 rays a point
   for (const char* stage : {"load", "uv", "texels", "clusters", "links", "direct", "solve"})
     EXPECT_TRUE(report.at("stages").contains(stage)) << stage;

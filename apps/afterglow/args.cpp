@@ -57,8 +57,14 @@ bool Args::parse(int argc, char** argv, int first, const std::vector<OptionSpec>
       value = argv[++i];
     }
     values_[spec->name] = value;
+    all_[spec->name].push_back(value);
   }
   return true;
+}
+
+std::vector<std::string> Args::getAll(const std::string& name) const {
+  auto it = all_.find(name);
+  return it == all_.end() ? std::vector<std::string>() : it->second;
 }
 
 std::string Args::get(const std::string& name, const std::string& fallback) const {

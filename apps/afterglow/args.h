@@ -30,7 +30,9 @@ class Args {
   const std::string& error() const { return error_; }
 
   bool has(const std::string& name) const { return values_.count(name) != 0; }
-  std::string get(const std::string& name, const std::string& fallback = "") const;
+  std::string get(const std::string& name, const std::string& fallback = "") const;  // the last
+  // Every value a repeatable option was given, in command-line order.
+  std::vector<std::string> getAll(const std::string& name) const;
   const std::vector<std::string>& positional() const { return positional_; }
 
   // Typed getters: false (with error() set) when the value does not parse or is out of range.
@@ -40,6 +42,7 @@ class Args {
 
  private:
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> all_;
   std::vector<std::string> positional_;
   std::string error_;
 };

@@ -8,12 +8,14 @@ int runUv(int argc, char** argv, int first);
 int runInfo(int argc, char** argv, int first);
 int runBake(int argc, char** argv, int first);
 int runRender(int argc, char** argv, int first);
+int runRelight(int argc, char** argv, int first);
 
 // Help texts (printed by --help, and after a usage error hint).
 extern const char kUvHelp[];
 extern const char kInfoHelp[];
 extern const char kBakeHelp[];
 extern const char kRenderHelp[];
+extern const char kRelightHelp[];
 extern const char kExitCodesHelp[];
 
 }  // namespace afterglow::cli

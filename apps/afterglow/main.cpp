@@ -30,6 +30,8 @@ const char kMainHelp[] =
     "  bake SCENE -o OUT/     bake lightmaps (EXR + PNG), a glTF using them, and a report\n"
     "  render SCENE.gltf -o VIEW.png\n"
     "                         ray trace a view of a baked scene\n"
+    "  relight OUT/ -o RELIT/ new lightmaps from a bake's transport with changed lights,\n"
+    "                         sky, albedo or emission (the runtime's re-solve)\n"
     "\n"
     "SCENE is a .gltf or .glb file, or a built-in scene: builtin:cornell, builtin:furnace.\n"
     "Run 'afterglow COMMAND --help' for a command's options.\n"
@@ -59,6 +61,8 @@ int main(int argc, char** argv) {
       std::printf("%s\n%s", kBakeHelp, kExitCodesHelp);
     else if (topic == "render")
       std::printf("%s\n%s", kRenderHelp, kExitCodesHelp);
+    else if (topic == "relight")
+      std::printf("%s\n%s", kRelightHelp, kExitCodesHelp);
     else
       std::printf("%s%s", kMainHelp, kExitCodesHelp);
     return kExitOk;
@@ -71,6 +75,7 @@ int main(int argc, char** argv) {
   if (command == "info") return runInfo(argc, argv, 2);
   if (command == "bake") return runBake(argc, argv, 2);
   if (command == "render") return runRender(argc, argv, 2);
+  if (command == "relight") return runRelight(argc, argv, 2);
   printError((command[0] == '-' ? "unknown option '" : "unknown command '") + command +
              "' (see afterglow --help)");
   return kExitUsage;

@@ -11,6 +11,7 @@
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
+#include "afterglow/runtime/transport_file.h"
 #include "afterglow/scenes/gltf.h"
 
 namespace fs = std::filesystem;
@@ -235,6 +236,25 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   if (Status s = out.write(gltf, doc.dump(1) + "\n"); !s) return s;
   written.push_back(gltf);
 
+  // The transport for the relighting runtime (a reference bake has none: it solved nothing).
+  json transportInfo = nullptr;
+  if (!result.transport.atlases.empty()) {
+    const std::string path = (dir / "transport.agt").string();
+    const std::string temp = out.tempPath(path);
+    std::string error;
+    // saveTransport's error starts with the path it wrote: name the final one instead.
+    if (!runtime::saveTransport(result.transport, temp, &error))
+      return Status::error(path + ": " + error.substr(std::min(error.size(), temp.size() + 2)));
+    std::error_code ec;
+    const uintmax_t bytes = fs::file_size(temp, ec);
+    written.push_back(path);
+    transportInfo = {{"file", "transport.agt"},
+                     {"bytes", ec ? 0 : bytes},
+                     {"bytesPerTexel", ec || texels.size() == 0
+                                           ? 0.0
+                                           : double(bytes) / double(texels.size())}};
+  }
+
   size_t valid = 0;
   for (uint8_t v : texels.valid) valid += v ? 1 : 0;
   if (texels.valid.empty()) valid = texels.size();
@@ -264,6 +284,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   report["links"] = result.transport.links.size();
   report["sources"] = {{"lights", lights}, {"emissiveMaterials", emissive}};
   report["raysTraced"] = result.raysTraced;
+  report["transport"] = transportInfo;
   report["stages"] = stages;
   report["peakMemoryBytes"] = peakMemoryBytes();
   report["atlases"] = atlases;

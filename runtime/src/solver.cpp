@@ -15,7 +15,6 @@ namespace afterglow::runtime {
 
 namespace {
 
-constexpr size_t kBlock = 2048;  // clusters, rows or texels per block of work
 constexpr size_t kAhead = 16;    // links: how far ahead the bounce prefetches cluster values
 
 glm::vec3 evalSky(const glm::vec3 sh[kShCount], const float* transfer) {
@@ -99,14 +98,6 @@ void Solver::reset() {
   std::fill(gathered_.begin(), gathered_.end(), glm::vec4(0.0f));
 }
 
-void Solver::forBlocks(size_t items, const std::function<void(size_t, size_t)>& body) const {
-  const size_t blocks = (items + kBlock - 1) / kBlock;
-  auto run = [&](size_t begin, size_t end) {
-    for (size_t b = begin; b < end; ++b) body(b * kBlock, std::min(items, (b + 1) * kBlock));
-  };
-  if (parallelFor_ && blocks > 1) parallelFor_(blocks, run);
-  else run(0, blocks);
-}
 
 void Solver::gatherRows() {
   const SparseLinks& links = data_.links;

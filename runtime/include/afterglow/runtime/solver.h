@@ -16,6 +16,7 @@
 // the thread count.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <functional>
 #include <vector>
@@ -77,8 +78,20 @@ class Solver {
   const std::vector<glm::vec4>& rowGathered() const { return gathered_; }
 
  private:
-  // body(first, last) over fixed blocks of `items` items, through parallelFor_ when set.
-  void forBlocks(size_t items, const std::function<void(size_t first, size_t last)>& body) const;
+  // body(first, last) over fixed blocks of `items` items, through parallelFor_ when set. A
+  // template, so the bodies (lambdas capturing more than a std::function holds inline) are
+  // never copied to the heap: update() must not allocate. `run` captures two references, which
+  // std::function keeps inline.
+  template <class Body>
+  void forBlocks(size_t items, const Body& body) const {
+    const size_t blocks = (items + kBlock - 1) / kBlock;
+    auto run = [&](size_t begin, size_t end) {
+      for (size_t b = begin; b < end; ++b) body(b * kBlock, std::min(items, (b + 1) * kBlock));
+    };
+    if (parallelFor_ && blocks > 1) parallelFor_(blocks, run);
+    else run(0, blocks);
+  }
+  static constexpr size_t kBlock = 2048;  // clusters, rows or texels per block of work
   // V_r for every row from the current R.
   void gatherRows();
 

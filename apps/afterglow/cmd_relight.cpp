@@ -1,0 +1,364 @@
+// afterglow relight: new lightmaps from a bake's transport file with changed light colours and
+// intensities, bounce intensities, sky, albedo or emission, through the runtime API an engine
+// links (runtime/runtime.h), without tracing a ray.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "afterglow/baker/bake_output.h"
+#include "afterglow/core/atomic_file.h"
+#include "afterglow/core/status.h"
+#include "afterglow/runtime/runtime.h"
+#include "args.h"
+#include "commands.h"
+#include "common.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace afterglow::cli {
+
+const char kRelightHelp[] =
+    "Usage: afterglow relight OUT/ -o RELIT/ [options]\n"
+    "\n"
+    "Re-solves the bounced light of a bake from its transport file (OUT/transport.agt) with\n"
+    "changed settings, as an engine does at run time, and writes RELIT/lightmaps/*.exr and\n"
+    "*.png, RELIT/scene.gltf (OUT's, with the changed lights and materials) and\n"
+    "RELIT/report.json, so 'afterglow render RELIT/scene.gltf' shows the result. Options that\n"
+    "name a light or material may repeat; NAME may also be #INDEX.\n"
+    "\n"
+    "Options:\n"
+    "  -o, --output RELIT/          output folder (required)\n"
+    "  --light NAME=r,g,b[,i]       a light's linear colour, and optionally its intensity\n"
+    "  --intensity NAME=i           a light's intensity (lux or candela, as in glTF)\n"
+    "  --bounce NAME=x              a light's bounce intensity (its share in bounced light)\n"
+    "  --disable NAME               switch a light off\n"
+    "  --sky r,g,b                  constant sky radiance, linear\n"
+    "  --albedo MAT=r,g,b           a material's diffuse albedo for bounces (and its base colour\n"
+    "                               in RELIT/scene.gltf)\n"
+    "  --emission MAT=r,g,b         a material's emitted radiance (materials that were emissive\n"
+    "                               when baked)\n"
+    "  --indirect-intensity X       scales all bounced light\n"
+    "  --bounces N                  bounce passes (default: the bake's; 0 = until converged)\n"
+    "  --quiet                      print nothing but errors\n"
+    "  -h, --help                   this help\n";
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+const std::vector<OptionSpec> kRelightOptions = {
+    {"output", 'o'}, {"light"},   {"intensity"},          {"bounce"},
+    {"disable"},     {"sky"},     {"albedo"},             {"emission"},
+    {"indirect-intensity"},       {"bounces"},            {"quiet", 0, false},
+    {"help", 'h', false}};
+
+// "a,b,c[,d]" into `count` floats (want 3, or 3 or 4 when allowFour).
+bool parseFloats(const std::string& text, std::vector<float>& out) {
+  out.clear();
+  const char* p = text.c_str();
+  while (true) {
+    char* end = nullptr;
+    const float v = std::strtof(p, &end);
+    if (end == p || !std::isfinite(v)) return false;
+    out.push_back(v);
+    if (*end == '\0') return true;
+    if (*end != ',') return false;
+    p = end + 1;
+  }
+}
+
+// "NAME=VALUE" split at the last '=' (names may contain '=' but values do not).
+bool splitAssignment(const std::string& text, std::string& name, std::string& value) {
+  const size_t eq = text.rfind('=');
+  if (eq == std::string::npos || eq == 0) return false;
+  name = text.substr(0, eq);
+  value = text.substr(eq + 1);
+  return true;
+}
+
+std::string lightNames(const runtime::Runtime& rt) {
+  std::string names;
+  for (int i = 0; i < rt.lightCount(); ++i)
+    names += (i ? ", '" : "'") + rt.lightName(i) + "'";
+  return names.empty() ? "none" : names;
+}
+
+std::string materialNames(const runtime::Runtime& rt) {
+  std::string names;
+  for (int i = 0; i < rt.materialCount(); ++i)
+    names += (i ? ", '" : "'") + rt.materialName(i) + "'";
+  return names.empty() ? "none" : names;
+}
+
+// NAME or #INDEX into an index, or -1.
+int resolve(const std::string& name, int count, int (runtime::Runtime::*find)(const std::string&) const,
+            const runtime::Runtime& rt) {
+  if (int i = (rt.*find)(name); i >= 0) return i;
+  if (name.size() > 1 && name[0] == '#') {
+    char* end = nullptr;
+    const long i = std::strtol(name.c_str() + 1, &end, 10);
+    if (*end == '\0' && i >= 0 && i < count) return int(i);
+  }
+  return -1;
+}
+
+}  // namespace
+
+int runRelight(int argc, char** argv, int first) {
+  auto usage = [](const std::string& message) {
+    printError("relight: " + message + " (see afterglow relight --help)");
+    return int(kExitUsage);
+  };
+  Args args;
+  if (!args.parse(argc, argv, first, kRelightOptions)) return usage(args.error());
+  if (args.has("help")) {
+    std::printf("%s\n%s", kRelightHelp, kExitCodesHelp);
+    return kExitOk;
+  }
+  if (args.positional().size() != 1) return usage("give one bake folder OUT/");
+  if (!args.has("output")) return usage("-o RELIT/ is required");
+  const fs::path in = args.positional()[0];
+  const fs::path outDir = args.get("output");
+  const bool quiet = args.has("quiet");
+  std::error_code ec;
+  if (fs::equivalent(in, outDir, ec)) return usage("RELIT/ must not be the bake folder itself");
+
+  // The bake's report: how it solved (bounces) and what it recorded, carried into ours.
+  const fs::path reportPath = in / "report.json";
+  Result<std::string> reportText = readFile(reportPath.string());
+  if (!reportText) {
+    printError(reportText.message() + " (is " + in.string() + " a bake folder?)");
+    return kExitBadInput;
+  }
+  json report = json::parse(reportText.value(), nullptr, false);
+  if (report.is_discarded() || !report.is_object() || !report.value("settings", json()).is_object()) {
+    printError(reportPath.string() + ": not a bake report");
+    return kExitBadInput;
+  }
+  json& settings = report["settings"];
+  int bounces = settings.value("bounces", 0);
+  if (!args.getInt("bounces", bounces, 0, 100000, &bounces)) return usage(args.error());
+
+  auto t0 = Clock::now();
+  const std::string transportPath = (in / "transport.agt").string();
+  std::string error;
+  std::unique_ptr<runtime::Runtime> rt = runtime::Runtime::load(transportPath, &error);
+  if (!rt) {
+    printError(error);
+    return kExitBadInput;
+  }
+  const double loadSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+
+  Result<std::string> gltfText = readFile((in / "scene.gltf").string());
+  if (!gltfText) {
+    printError(gltfText.message());
+    return kExitBadInput;
+  }
+  json gltf = json::parse(gltfText.value(), nullptr, false);
+  if (gltf.is_discarded() || !gltf.is_object()) {
+    printError((in / "scene.gltf").string() + ": not valid JSON");
+    return kExitBadInput;
+  }
+  // The bake exports lights and materials in the transport's order.
+  json* gltfLights = nullptr;
+  if (gltf.contains("extensions") && gltf["extensions"].contains("KHR_lights_punctual"))
+    gltfLights = &gltf["extensions"]["KHR_lights_punctual"]["lights"];
+  auto gltfLight = [&](int i) -> json* {
+    return gltfLights && gltfLights->is_array() && size_t(i) < gltfLights->size()
+               ? &(*gltfLights)[size_t(i)] : nullptr;
+  };
+  auto gltfMaterial = [&](int i) -> json* {
+    return gltf.contains("materials") && size_t(i) < gltf["materials"].size()
+               ? &gltf["materials"][size_t(i)] : nullptr;
+  };
+
+  json changes = json::array();
+  auto findLight = [&](const std::string& option, const std::string& name, int* light) {
+    *light = resolve(name, rt->lightCount(), &runtime::Runtime::findLight, *rt);
+    if (*light < 0) {
+      error = "--" + option + ": no light '" + name + "' in " + transportPath + " (lights: " +
+              lightNames(*rt) + ")";
+      return false;
+    }
+    return true;
+  };
+  auto findMaterial = [&](const std::string& option, const std::string& name, int* material) {
+    *material = resolve(name, rt->materialCount(), &runtime::Runtime::findMaterial, *rt);
+    if (*material < 0) {
+      error = "--" + option + ": no material '" + name + "' in " + transportPath +
+              " (materials: " + materialNames(*rt) + ")";
+      return false;
+    }
+    return true;
+  };
+  std::string name, value;
+  std::vector<float> v;
+  for (const std::string& a : args.getAll("light")) {
+    int light = -1;
+    if (!splitAssignment(a, name, value) || !parseFloats(value, v) || v.size() < 3 || v.size() > 4)
+      return usage("--light wants NAME=r,g,b[,intensity], got '" + a + "'");
+    if (!findLight("light", name, &light)) return usage(error);
+    const glm::vec3 color(v[0], v[1], v[2]);
+    rt->setLightColor(light, color);
+    if (json* l = gltfLight(light)) (*l)["color"] = {color.r, color.g, color.b};
+    if (v.size() == 4) {
+      rt->setLightIntensity(light, v[3]);
+      if (json* l = gltfLight(light)) (*l)["intensity"] = v[3];
+    }
+    changes.push_back({{"light", rt->lightName(light)}, {"color", {color.r, color.g, color.b}},
+                       {"intensity", rt->lightIntensity(light)}});
+  }
+  for (const std::string& a : args.getAll("intensity")) {
+    int light = -1;
+    if (!splitAssignment(a, name, value) || !parseFloats(value, v) || v.size() != 1)
+      return usage("--intensity wants NAME=i, got '" + a + "'");
+    if (!findLight("intensity", name, &light)) return usage(error);
+    rt->setLightIntensity(light, v[0]);
+    if (json* l = gltfLight(light)) (*l)["intensity"] = v[0];
+    changes.push_back({{"light", rt->lightName(light)}, {"intensity", v[0]}});
+  }
+  for (const std::string& a : args.getAll("bounce")) {
+    int light = -1;
+    if (!splitAssignment(a, name, value) || !parseFloats(value, v) || v.size() != 1 || v[0] < 0)
+      return usage("--bounce wants NAME=x with x >= 0, got '" + a + "'");
+    if (!findLight("bounce", name, &light)) return usage(error);
+    rt->setBounceIntensity(light, v[0]);
+    if (json* l = gltfLight(light)) (*l)["extras"]["afterglow"]["bounceIntensity"] = v[0];
+    changes.push_back({{"light", rt->lightName(light)}, {"bounceIntensity", v[0]}});
+  }
+  for (const std::string& a : args.getAll("disable")) {
+    int light = -1;
+    if (!findLight("disable", a, &light)) return usage(error);
+    rt->setLightEnabled(light, false);
+    if (json* l = gltfLight(light)) (*l)["intensity"] = 0.0f;
+    changes.push_back({{"light", rt->lightName(light)}, {"enabled", false}});
+  }
+  if (args.has("sky")) {
+    if (!parseFloats(args.get("sky"), v) || v.size() != 3)
+      return usage("--sky wants r,g,b, got '" + args.get("sky") + "'");
+    rt->setSky(glm::vec3(v[0], v[1], v[2]));
+    settings["sky"] = {v[0], v[1], v[2]};
+    settings["skyImage"] = "";
+    changes.push_back({{"sky", {v[0], v[1], v[2]}}});
+  }
+  for (const std::string& a : args.getAll("albedo")) {
+    int material = -1;
+    if (!splitAssignment(a, name, value) || !parseFloats(value, v) || v.size() != 3)
+      return usage("--albedo wants MAT=r,g,b, got '" + a + "'");
+    if (!findMaterial("albedo", name, &material)) return usage(error);
+    rt->setAlbedo(material, glm::vec3(v[0], v[1], v[2]));
+    if (json* m = gltfMaterial(material)) {
+      json& factor = (*m)["pbrMetallicRoughness"]["baseColorFactor"];
+      const float alpha = factor.is_array() && factor.size() == 4 ? factor[3].get<float>() : 1.0f;
+      factor = {v[0], v[1], v[2], alpha};
+    }
+    changes.push_back({{"material", rt->materialName(material)}, {"albedo", {v[0], v[1], v[2]}}});
+  }
+  for (const std::string& a : args.getAll("emission")) {
+    int material = -1;
+    if (!splitAssignment(a, name, value) || !parseFloats(value, v) || v.size() != 3)
+      return usage("--emission wants MAT=r,g,b, got '" + a + "'");
+    if (!findMaterial("emission", name, &material)) return usage(error);
+    if (!rt->setEmission(material, glm::vec3(v[0], v[1], v[2])))
+      return usage("--emission: material '" + rt->materialName(material) +
+                   "' was not emissive when baked, so its light was never traced (bake it with "
+                   "some emission to relight it)");
+    if (json* m = gltfMaterial(material)) {
+      (*m)["emissiveFactor"] = {v[0], v[1], v[2]};
+      if (m->contains("extensions")) (*m)["extensions"].erase("KHR_materials_emissive_strength");
+    }
+    changes.push_back(
+        {{"material", rt->materialName(material)}, {"emission", {v[0], v[1], v[2]}}});
+  }
+  float indirect = rt->indirectIntensity();
+  if (!args.getFloat("indirect-intensity", indirect, -1e-30f, 1e6f, &indirect))
+    return usage(args.error());
+  if (args.has("indirect-intensity")) {
+    rt->setIndirectIntensity(indirect);
+    settings["indirectIntensity"] = indirect;
+    changes.push_back({{"indirectIntensity", indirect}});
+  }
+
+  // From scratch, with the bake's stopping rule: the same passes a fresh bake with these
+  // settings runs, so the lightmaps agree with it.
+  runtime::UpdateOptions update;
+  update.maxBounces = bounces;
+  update.fromScratch = true;
+  const runtime::UpdateStats stats = rt->update(update);
+
+  AtomicOutput files;
+  std::vector<glm::vec3> image;
+  json atlases = json::array();
+  for (int a = 0; a < rt->atlasCount(); ++a) {
+    rt->readAtlas(a, image);
+    const int w = rt->atlasWidth(a), h = rt->atlasHeight(a);
+    const std::string exr = format("lightmaps/lightmap%d.exr", a);
+    const std::string png = format("lightmaps/lightmap%d.png", a);
+    std::vector<uint8_t> covered(image.size(), 0);
+    const std::vector<uint32_t>& texelOf = rt->data().atlases[size_t(a)].texelOfPixel;
+    for (size_t p = 0; p < covered.size() && p < texelOf.size(); ++p)
+      covered[p] = texelOf[p] != runtime::kNoTexel;
+    const float exposure = baker::autoExposure(image, covered);
+    Status s = baker::writeExr((outDir / exr).string(), w, h, image, files);
+    if (s) s = baker::writeTonemappedPng((outDir / png).string(), w, h, image, exposure, files);
+    if (!s) {
+      printError(s.message());
+      return kExitOutput;
+    }
+    atlases.push_back({{"width", w}, {"height", h}, {"exr", exr}, {"png", png},
+                       {"previewExposure", exposure}});
+  }
+  // The glTF and its buffer, so render finds geometry, lights and the relit lightmaps alike;
+  // the level's own textures stay where they are, referred to from RELIT/.
+  if (gltf.contains("images"))
+    for (json& image : gltf["images"]) {
+      const std::string uri = image.value("uri", std::string());
+      if (uri.empty() || uri.rfind("data:", 0) == 0 || uri.rfind("lightmaps/", 0) == 0 ||
+          fs::path(uri).is_absolute())
+        continue;
+      image["uri"] = fs::proximate(fs::absolute(in / uri), fs::absolute(outDir)).generic_string();
+    }
+  Status s = files.write((outDir / "scene.gltf").string(), gltf.dump(1) + "\n");
+  if (s && gltf.contains("buffers"))
+    for (const json& b : gltf["buffers"]) {
+      const std::string uri = b.value("uri", std::string());
+      if (uri.empty() || uri.rfind("data:", 0) == 0) continue;
+      Result<std::string> bytes = readFile((in / uri).string());
+      if (!bytes) {
+        printError(bytes.message());
+        return kExitBadInput;
+      }
+      if (s = files.write((outDir / uri).string(), bytes.value()); !s) break;
+    }
+  report["relight"] = {{"from", fs::absolute(in).string()},
+                       {"changes", changes},
+                       {"bounces", stats.bounces},
+                       {"converged", stats.converged},
+                       {"loadSeconds", loadSeconds},
+                       {"updateMilliseconds", stats.milliseconds}};
+  report["atlases"] = atlases;
+  if (s) s = files.write((outDir / "report.json").string(), report.dump(2) + "\n");
+  if (s) s = files.commit();
+  if (!s) {
+    printError(s.message());
+    return kExitOutput;
+  }
+  if (!quiet) {
+    std::printf("loaded        %s in %.3f s (%d texels, %d lights, %d materials)\n",
+                transportPath.c_str(), loadSeconds, rt->texelCount(), rt->lightCount(),
+                rt->materialCount());
+    std::printf("solved        %d bounces%s in %.1f ms\n", stats.bounces,
+                stats.converged ? " (converged)" : "", stats.milliseconds);
+    std::printf("wrote         %s (%d atlases)\n", outDir.string().c_str(), rt->atlasCount());
+  }
+  return kExitOk;
+}
+
+}  // namespace afterglow::cli

@@ -1,0 +1,225 @@
+// The relighting runtime: what an engine links to change lights, sky and materials of a baked
+// level and get new lightmaps every frame, without re-baking. GLM and the standard library only.
+//
+// Typical use:
+//
+//   std::string error;
+//   auto rt = afterglow::runtime::Runtime::load("out/transport.agt", &error);
+//   if (!rt) { log(error); return; }
+//   int sun = rt->findLight("Sun");
+//   ...each frame:
+//   rt->setLightColor(sun, {1.0f, 0.8f, 0.6f});   // any thread
+//   rt->update({/*maxBounces=*/1});                 // update thread: one bounce a frame
+//   rt->readAtlas(0, pixels);                       // render thread: upload to the GPU
+//
+// How it works: setters only record the new value. update() applies everything recorded since
+// the last update to the transport, re-runs the solver's per-cluster setup when anything that
+// affects light changed, runs bounce passes starting from the previous solution (a small
+// change converges in a few passes; Enlighten runs one a frame), and produces new texel values
+// and atlases. Values are E/π (the outgoing radiance of a white Lambertian surface), linear RGB,
+// exactly the units of the baked lightmaps.
+//
+// Threads. These calls may run at the same time as each other and as update():
+//   - every setter and getter of settings (light, sky, material, indirect intensity);
+//   - readAtlas() and readTexels(), which always see one whole completed update (the outputs
+//     are double-buffered; a read copies under a lock that update() holds only for a pointer
+//     swap, so neither waits on the other's real work);
+//   - the constant queries (counts, names, find*, atlas sizes, canSetEmission).
+// update() calls are serialised (a second caller waits), and so is setParallelFor(). data() is
+// the one exception: read it only while no update() runs.
+//
+// Allocation: load() and fromData() allocate everything up front; update(), the settings calls
+// and the reads do not (readAtlas into a std::vector only if the vector is too small). Caveat:
+// the Solver calls inside update() currently heap-allocate a few small closures each (its block
+// loop takes a std::function); the test UpdateDoesNotAllocate tracks that.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/runtime/solver.h"
+#include "afterglow/runtime/transport.h"
+
+namespace afterglow::runtime {
+
+struct UpdateOptions {
+  // Bounce passes this call:
+  //   > 0  exactly this many (like SolveOptions::maxBounces; the tolerance does not stop them),
+  //   0    until the largest relative change falls below `tolerance`, or 1000 passes,
+  //   < 0  none: only apply new settings and recompute the texels (e.g. after
+  //        setIndirectIntensity, or to see a light change's direct part at once).
+  int maxBounces = 0;
+  float tolerance = 1e-3f;  // as SolveOptions::tolerance
+  // > 0: the whole call should take at most this long. Before each pass after the first, the
+  // call stops if the time so far plus the last pass's time plus the previous update's texel
+  // output time would exceed it. The first pass always runs (when maxBounces >= 0), so a budget
+  // smaller than one pass still makes progress.
+  double timeBudgetMs = 0.0;
+  // Reset the bounced light to zero first, as a fresh bake does: with the same settings,
+  // tolerance and maxBounces the atlases equal the baker's bit for bit. Off (default): start from
+  // the last solution, which converges much faster after small changes.
+  bool fromScratch = false;
+};
+
+struct UpdateStats {
+  int bounces = 0;          // passes run
+  bool converged = false;   // the last pass changed the solution by less than the tolerance
+  float change = 0.0f;      // the last pass's largest relative change (0 when no pass ran)
+  double milliseconds = 0;  // wall time of the whole call
+};
+
+class Runtime {
+ public:
+  // Loads a transport file (OUT/transport.agt). On failure returns nullptr and sets *error
+  // (when not null) to one line starting with the path.
+  static std::unique_ptr<Runtime> load(const std::string& path, std::string* error);
+  // From a transport already in memory (the baker and tests). Takes ownership. Returns nullptr
+  // and sets *error when data.validate() rejects it.
+  static std::unique_ptr<Runtime> fromData(TransportData data, std::string* error);
+
+  Runtime(const Runtime&) = delete;
+  Runtime& operator=(const Runtime&) = delete;
+  ~Runtime();
+
+  // Spreads the solver's work over an engine's job system (see solver.h). Waits for a running
+  // update(). Without it everything runs on the thread calling update(). Results do not depend
+  // on it.
+  void setParallelFor(ParallelFor parallelFor);
+
+  // ---- Lights ---------------------------------------------------------------------------------
+  // The transport's sources of kind Light (punctual lights), numbered 0..lightCount()-1 in
+  // transport order. Emissive surfaces are driven through their material (setEmission).
+  int lightCount() const;
+  const std::string& lightName(int light) const;  // empty for an invalid index
+  int findLight(const std::string& name) const;   // the first light of that name, or -1
+
+  // Setters return false (and change nothing) for an invalid index, an unknown name or a
+  // non-finite value (NaN or infinity would poison the warm-started solution for good).
+  bool setLightColor(int light, glm::vec3 linearRgb);
+  bool setLightColor(const std::string& name, glm::vec3 linearRgb);
+  bool setLightIntensity(int light, float intensity);  // lux or candela, as in glTF
+  bool setLightIntensity(const std::string& name, float intensity);
+  // Scales the light in bounced light only (1 = physical, 0 = direct light only).
+  bool setBounceIntensity(int light, float scale);
+  bool setBounceIntensity(const std::string& name, float scale);
+  // A disabled light contributes exactly what intensity 0 would.
+  bool setLightEnabled(int light, bool enabled);
+  bool setLightEnabled(const std::string& name, bool enabled);
+
+  // The current settings (the latest set, applied or not); zero/false for an invalid index.
+  glm::vec3 lightColor(int light) const;
+  float lightIntensity(int light) const;
+  float bounceIntensity(int light) const;
+  bool lightEnabled(int light) const;
+
+  // ---- Sky ------------------------------------------------------------------------------------
+  // Sky radiance as SH L2 (kShCount RGB coefficients), or a constant radiance. Non-finite
+  // values are ignored (returns false).
+  bool setSky(glm::vec3 constantRadiance);
+  bool setSkySh(const glm::vec3 sh[kShCount]);
+  void skySh(glm::vec3 sh[kShCount]) const;
+
+  // ---- Materials ------------------------------------------------------------------------------
+  int materialCount() const;
+  const std::string& materialName(int material) const;  // empty for an invalid index
+  int findMaterial(const std::string& name) const;       // first of that name, or -1
+
+  // Diffuse albedo factor used for bounces (multiplied by each cluster's texture mean). Keep it
+  // below 1: an albedo of 1 or more in a closed room never converges.
+  bool setAlbedo(int material, glm::vec3 linearRgb);
+  bool setAlbedo(const std::string& name, glm::vec3 linearRgb);
+  // Emitted radiance. Only for materials that were emissive at bake time: the transfer from
+  // their surfaces was computed only for those. Returns false for any other material (including
+  // one baked with zero emission); canSetEmission() says which.
+  bool setEmission(int material, glm::vec3 linearRgb);
+  bool setEmission(const std::string& name, glm::vec3 linearRgb);
+  bool canSetEmission(int material) const;
+  glm::vec3 albedo(int material) const;
+  glm::vec3 emission(int material) const;
+
+  // Scales all bounced light reaching the texels (Unity's indirect intensity; 1 = physical).
+  // Cheap: needs no bounce pass, only update() (maxBounces < 0 suffices).
+  bool setIndirectIntensity(float scale);
+  float indirectIntensity() const;
+
+  // ---- Solving --------------------------------------------------------------------------------
+  // Applies the settings set since the last call and runs bounce passes (see UpdateOptions),
+  // then publishes new texel values and atlases to readAtlas()/readTexels().
+  UpdateStats update(const UpdateOptions& options = {});
+
+  // ---- Output ---------------------------------------------------------------------------------
+  // From the last completed update(); all black before the first.
+  int atlasCount() const;
+  int atlasWidth(int atlas) const;   // 0 for an invalid index
+  int atlasHeight(int atlas) const;
+  // Linear float RGB, width*height*3 floats, row 0 at v = 0, pixels exactly as the baker
+  // resolves them (padding, seams). False for an invalid index.
+  bool readAtlas(int atlas, float* rgb) const;
+  bool readAtlas(int atlas, std::vector<glm::vec3>& image) const;  // resized to width*height
+  // Per texel (direct + indirect), texelCount() values.
+  int texelCount() const;
+  void readTexels(glm::vec3* texels) const;
+  void readTexels(float* rgb) const;  // texelCount()*3 floats
+
+  // The transport, with the settings as of the last update() applied. Only while no update()
+  // runs.
+  const TransportData& data() const { return data_; }
+
+ private:
+  struct LightSettings {
+    glm::vec3 color{1.0f};
+    float intensity = 1.0f;
+    float bounceIntensity = 1.0f;
+    bool enabled = true;
+  };
+  struct MaterialSettings {
+    glm::vec3 albedo{0.8f};
+    glm::vec3 emission{0.0f};
+  };
+  // What update() must redo for the settings changed since the last one.
+  enum Dirty : unsigned {
+    kDirtyLights = 1u,      // copy light settings, prepare(), direct texels
+    kDirtyMaterials = 2u,   // copy albedo/emission, prepare() (direct texels: see kDirtyDirect)
+    kDirtySky = 4u,         // copy sky, prepare(), direct texels
+    kDirtyDirect = 8u,      // direct texels (a light, emission or sky changed)
+    kDirtyIndirect = 16u,   // copy indirect intensity
+  };
+
+  explicit Runtime(TransportData data);
+  bool lightOk(int light) const { return light >= 0 && light < int(lightSource_.size()); }
+  bool materialOk(int material) const {
+    return material >= 0 && material < int(data_.materials.size());
+  }
+
+  TransportData data_;
+  std::unique_ptr<Solver> solver_;  // refers to data_
+  std::vector<uint32_t> lightSource_;   // light -> index into data_.sources
+  std::vector<uint8_t> emissiveMaterial_;  // per material: has an emissive source
+
+  // Pending settings, written by setters, copied into data_ by update().
+  mutable std::mutex settingsMutex_;
+  std::vector<LightSettings> lights_;
+  std::vector<MaterialSettings> materials_;
+  glm::vec3 sky_[kShCount] = {};
+  float indirectIntensity_ = 1.0f;
+  unsigned dirty_ = 0;
+
+  // Serialises update() and setParallelFor(); guards everything below but the outputs.
+  std::mutex updateMutex_;
+  std::vector<glm::vec3> direct_;    // kept until a light, emission or the sky changes
+  std::vector<glm::vec3> indirect_;
+  double lastOutputMs_ = 0.0;        // texel output time of the last update (for the budget)
+
+  // Double-buffered outputs: update() fills [1 - front_], then flips front_ under outputMutex_.
+  mutable std::mutex outputMutex_;
+  int front_ = 0;
+  std::vector<glm::vec3> texels_[2];
+  std::vector<std::vector<glm::vec3>> images_[2];
+};
+
+}  // namespace afterglow::runtime

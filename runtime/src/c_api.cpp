@@ -1,0 +1,188 @@
+// The C API (afterglow_runtime.h) over Runtime. No exception crosses it: load() turns
+// std::bad_alloc into an error message; nothing else here throws.
+#include "afterglow_runtime.h"
+
+#include <algorithm>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <new>
+#include <string>
+
+#include "afterglow/runtime/runtime.h"
+
+using afterglow::runtime::Runtime;
+
+struct AfterglowRuntime {
+  std::unique_ptr<Runtime> runtime;
+};
+
+namespace {
+
+void writeError(char* err, size_t size, const std::string& message) {
+  if (!err || size == 0) return;
+  const size_t n = std::min(size - 1, message.size());
+  std::memcpy(err, message.data(), n);
+  err[n] = '\0';
+}
+
+const char* nameOrNull(const std::string& name, bool valid) { return valid ? name.c_str() : nullptr; }
+
+}  // namespace
+
+extern "C" {
+
+void afterglow_runtime_default_options(AfterglowUpdateOptions* options) {
+  if (!options) return;
+  const afterglow::runtime::UpdateOptions defaults;
+  options->max_bounces = defaults.maxBounces;
+  options->tolerance = defaults.tolerance;
+  options->time_budget_ms = defaults.timeBudgetMs;
+  options->from_scratch = defaults.fromScratch ? 1 : 0;
+}
+
+AfterglowRuntime* afterglow_runtime_load(const char* path, char* err, size_t err_size) {
+  if (!path) {
+    writeError(err, err_size, "afterglow_runtime_load: no path");
+    return nullptr;
+  }
+  try {
+    std::string error;
+    std::unique_ptr<Runtime> runtime = Runtime::load(path, &error);
+    if (!runtime) {
+      writeError(err, err_size, error);
+      return nullptr;
+    }
+    writeError(err, err_size, "");
+    return new AfterglowRuntime{std::move(runtime)};
+  } catch (const std::exception& e) {
+    writeError(err, err_size, std::string(path) + ": " + e.what());
+    return nullptr;
+  }
+}
+
+void afterglow_runtime_free(AfterglowRuntime* runtime) { delete runtime; }
+
+int afterglow_runtime_light_count(const AfterglowRuntime* rt) {
+  return rt ? rt->runtime->lightCount() : 0;
+}
+
+const char* afterglow_runtime_light_name(const AfterglowRuntime* rt, int light) {
+  if (!rt) return nullptr;
+  return nameOrNull(rt->runtime->lightName(light), light >= 0 && light < rt->runtime->lightCount());
+}
+
+int afterglow_runtime_find_light(const AfterglowRuntime* rt, const char* name) {
+  return rt && name ? rt->runtime->findLight(name) : -1;
+}
+
+int afterglow_runtime_set_light_color(AfterglowRuntime* rt, int light, float r, float g, float b) {
+  return rt && rt->runtime->setLightColor(light, glm::vec3(r, g, b));
+}
+
+int afterglow_runtime_set_light_intensity(AfterglowRuntime* rt, int light, float intensity) {
+  return rt && rt->runtime->setLightIntensity(light, intensity);
+}
+
+int afterglow_runtime_set_bounce_intensity(AfterglowRuntime* rt, int light, float scale) {
+  return rt && rt->runtime->setBounceIntensity(light, scale);
+}
+
+int afterglow_runtime_set_light_enabled(AfterglowRuntime* rt, int light, int enabled) {
+  return rt && rt->runtime->setLightEnabled(light, enabled != 0);
+}
+
+int afterglow_runtime_set_sky(AfterglowRuntime* rt, float r, float g, float b) {
+  return rt && rt->runtime->setSky(glm::vec3(r, g, b));
+}
+
+int afterglow_runtime_set_sky_sh(AfterglowRuntime* rt, const float* sh27) {
+  if (!rt || !sh27) return 0;
+  glm::vec3 sh[afterglow::runtime::kShCount];
+  for (int i = 0; i < afterglow::runtime::kShCount; ++i)
+    sh[i] = glm::vec3(sh27[3 * i], sh27[3 * i + 1], sh27[3 * i + 2]);
+  return rt->runtime->setSkySh(sh);
+}
+
+int afterglow_runtime_material_count(const AfterglowRuntime* rt) {
+  return rt ? rt->runtime->materialCount() : 0;
+}
+
+const char* afterglow_runtime_material_name(const AfterglowRuntime* rt, int material) {
+  if (!rt) return nullptr;
+  return nameOrNull(rt->runtime->materialName(material),
+                    material >= 0 && material < rt->runtime->materialCount());
+}
+
+int afterglow_runtime_find_material(const AfterglowRuntime* rt, const char* name) {
+  return rt && name ? rt->runtime->findMaterial(name) : -1;
+}
+
+int afterglow_runtime_set_albedo(AfterglowRuntime* rt, int material, float r, float g, float b) {
+  return rt && rt->runtime->setAlbedo(material, glm::vec3(r, g, b));
+}
+
+int afterglow_runtime_set_emission(AfterglowRuntime* rt, int material, float r, float g, float b) {
+  return rt && rt->runtime->setEmission(material, glm::vec3(r, g, b));
+}
+
+int afterglow_runtime_can_set_emission(const AfterglowRuntime* rt, int material) {
+  return rt && rt->runtime->canSetEmission(material);
+}
+
+int afterglow_runtime_set_indirect_intensity(AfterglowRuntime* rt, float scale) {
+  return rt && rt->runtime->setIndirectIntensity(scale);
+}
+
+int afterglow_runtime_update(AfterglowRuntime* rt, const AfterglowUpdateOptions* options,
+                             AfterglowUpdateStats* stats) {
+  if (!rt) return 0;
+  afterglow::runtime::UpdateOptions o;
+  if (options) {
+    o.maxBounces = options->max_bounces;
+    o.tolerance = options->tolerance;
+    o.timeBudgetMs = options->time_budget_ms;
+    o.fromScratch = options->from_scratch != 0;
+  }
+  const afterglow::runtime::UpdateStats s = rt->runtime->update(o);
+  if (stats) {
+    stats->bounces = s.bounces;
+    stats->converged = s.converged ? 1 : 0;
+    stats->change = s.change;
+    stats->milliseconds = s.milliseconds;
+  }
+  return 1;
+}
+
+int afterglow_runtime_atlas_count(const AfterglowRuntime* rt) {
+  return rt ? rt->runtime->atlasCount() : 0;
+}
+
+int afterglow_runtime_atlas_width(const AfterglowRuntime* rt, int atlas) {
+  return rt ? rt->runtime->atlasWidth(atlas) : 0;
+}
+
+int afterglow_runtime_atlas_height(const AfterglowRuntime* rt, int atlas) {
+  return rt ? rt->runtime->atlasHeight(atlas) : 0;
+}
+
+int afterglow_runtime_read_atlas(const AfterglowRuntime* rt, int atlas, float* rgb,
+                                 size_t float_count) {
+  if (!rt || !rgb) return 0;
+  const size_t needed =
+      size_t(rt->runtime->atlasWidth(atlas)) * size_t(rt->runtime->atlasHeight(atlas)) * 3;
+  if (needed == 0 || float_count < needed) return 0;
+  return rt->runtime->readAtlas(atlas, rgb);
+}
+
+int afterglow_runtime_texel_count(const AfterglowRuntime* rt) {
+  return rt ? rt->runtime->texelCount() : 0;
+}
+
+int afterglow_runtime_read_texels(const AfterglowRuntime* rt, float* rgb, size_t float_count) {
+  if (!rt || !rgb || float_count < size_t(rt->runtime->texelCount()) * 3) return 0;
+  rt->runtime->readTexels(rgb);
+  return 1;
+}
+
+}  // extern "C"

@@ -1,0 +1,375 @@
+#include "afterglow/runtime/runtime.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "afterglow/runtime/transport_file.h"
+
+namespace afterglow::runtime {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+const std::string& emptyString() {
+  static const std::string empty;
+  return empty;
+}
+
+}  // namespace
+
+std::unique_ptr<Runtime> Runtime::load(const std::string& path, std::string* error) {
+  TransportData data;
+  if (!loadTransport(path, data, error)) return nullptr;
+  std::string why;
+  auto runtime = fromData(std::move(data), &why);
+  if (!runtime && error) *error = path + ": " + why;
+  return runtime;
+}
+
+std::unique_ptr<Runtime> Runtime::fromData(TransportData data, std::string* error) {
+  if (std::string why = data.validate(); !why.empty()) {
+    if (error) *error = "invalid transport: " + why;
+    return nullptr;
+  }
+  return std::unique_ptr<Runtime>(new Runtime(std::move(data)));
+}
+
+Runtime::Runtime(TransportData data) : data_(std::move(data)) {
+  solver_ = std::make_unique<Solver>(data_);
+  emissiveMaterial_.assign(data_.materials.size(), 0);
+  for (size_t i = 0; i < data_.sources.size(); ++i) {
+    const Source& s = data_.sources[i];
+    if (s.kind == SourceKind::Light) {
+      lightSource_.push_back(uint32_t(i));
+      lights_.push_back({s.color, s.intensity, s.bounceIntensity, s.enabled});
+    } else {
+      emissiveMaterial_[s.material] = 1;
+    }
+  }
+  for (const MaterialParams& m : data_.materials) materials_.push_back({m.albedo, m.emission});
+  std::copy(data_.skySh, data_.skySh + kShCount, sky_);
+  indirectIntensity_ = data_.indirectIntensity;
+  // The first update() computes the direct light (the solver's constructor prepared already).
+  dirty_ = kDirtyDirect;
+
+  direct_.assign(data_.texelCount, glm::vec3(0.0f));
+  indirect_.assign(data_.texelCount, glm::vec3(0.0f));
+  for (int b = 0; b < 2; ++b) {
+    texels_[b].assign(data_.texelCount, glm::vec3(0.0f));
+    for (const AtlasLayout& layout : data_.atlases)
+      images_[b].emplace_back(size_t(layout.width) * size_t(layout.height), glm::vec3(0.0f));
+  }
+}
+
+Runtime::~Runtime() = default;
+
+void Runtime::setParallelFor(ParallelFor parallelFor) {
+  std::lock_guard<std::mutex> lock(updateMutex_);
+  solver_->setParallelFor(std::move(parallelFor));
+}
+
+// ---- Lights -----------------------------------------------------------------------------------
+
+int Runtime::lightCount() const { return int(lightSource_.size()); }
+
+const std::string& Runtime::lightName(int light) const {
+  return lightOk(light) ? data_.sources[lightSource_[size_t(light)]].name : emptyString();
+}
+
+int Runtime::findLight(const std::string& name) const {
+  for (size_t i = 0; i < lightSource_.size(); ++i)
+    if (data_.sources[lightSource_[i]].name == name) return int(i);
+  return -1;
+}
+
+bool Runtime::setLightColor(int light, glm::vec3 linearRgb) {
+  if (!lightOk(light) || !finite(linearRgb)) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  LightSettings& l = lights_[size_t(light)];
+  if (l.color != linearRgb) {
+    l.color = linearRgb;
+    dirty_ |= kDirtyLights | kDirtyDirect;
+  }
+  return true;
+}
+
+bool Runtime::setLightIntensity(int light, float intensity) {
+  if (!lightOk(light) || !std::isfinite(intensity)) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  LightSettings& l = lights_[size_t(light)];
+  if (l.intensity != intensity) {
+    l.intensity = intensity;
+    dirty_ |= kDirtyLights | kDirtyDirect;
+  }
+  return true;
+}
+
+bool Runtime::setBounceIntensity(int light, float scale) {
+  if (!lightOk(light) || !std::isfinite(scale)) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  LightSettings& l = lights_[size_t(light)];
+  if (l.bounceIntensity != scale) {
+    l.bounceIntensity = scale;
+    dirty_ |= kDirtyLights;  // bounced light only: the texels' direct light stays
+  }
+  return true;
+}
+
+bool Runtime::setLightEnabled(int light, bool enabled) {
+  if (!lightOk(light)) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  LightSettings& l = lights_[size_t(light)];
+  if (l.enabled != enabled) {
+    l.enabled = enabled;
+    dirty_ |= kDirtyLights | kDirtyDirect;
+  }
+  return true;
+}
+
+bool Runtime::setLightColor(const std::string& name, glm::vec3 linearRgb) {
+  return setLightColor(findLight(name), linearRgb);
+}
+bool Runtime::setLightIntensity(const std::string& name, float intensity) {
+  return setLightIntensity(findLight(name), intensity);
+}
+bool Runtime::setBounceIntensity(const std::string& name, float scale) {
+  return setBounceIntensity(findLight(name), scale);
+}
+bool Runtime::setLightEnabled(const std::string& name, bool enabled) {
+  return setLightEnabled(findLight(name), enabled);
+}
+
+glm::vec3 Runtime::lightColor(int light) const {
+  if (!lightOk(light)) return glm::vec3(0.0f);
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  return lights_[size_t(light)].color;
+}
+float Runtime::lightIntensity(int light) const {
+  if (!lightOk(light)) return 0.0f;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  return lights_[size_t(light)].intensity;
+}
+float Runtime::bounceIntensity(int light) const {
+  if (!lightOk(light)) return 0.0f;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  return lights_[size_t(light)].bounceIntensity;
+}
+bool Runtime::lightEnabled(int light) const {
+  if (!lightOk(light)) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  return lights_[size_t(light)].enabled;
+}
+
+// ---- Sky --------------------------------------------------------------------------------------
+
+bool Runtime::setSky(glm::vec3 constantRadiance) {
+  if (!finite(constantRadiance)) return false;
+  glm::vec3 sh[kShCount];
+  constantSkySh(constantRadiance, sh);
+  return setSkySh(sh);
+}
+
+bool Runtime::setSkySh(const glm::vec3 sh[kShCount]) {
+  for (int i = 0; i < kShCount; ++i)
+    if (!finite(sh[i])) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  if (!std::equal(sh, sh + kShCount, sky_)) {
+    std::copy(sh, sh + kShCount, sky_);
+    dirty_ |= kDirtySky | kDirtyDirect;
+  }
+  return true;
+}
+
+void Runtime::skySh(glm::vec3 sh[kShCount]) const {
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  std::copy(sky_, sky_ + kShCount, sh);
+}
+
+// ---- Materials --------------------------------------------------------------------------------
+
+int Runtime::materialCount() const { return int(data_.materials.size()); }
+
+const std::string& Runtime::materialName(int material) const {
+  return materialOk(material) ? data_.materials[size_t(material)].name : emptyString();
+}
+
+int Runtime::findMaterial(const std::string& name) const {
+  for (size_t i = 0; i < data_.materials.size(); ++i)
+    if (data_.materials[i].name == name) return int(i);
+  return -1;
+}
+
+bool Runtime::setAlbedo(int material, glm::vec3 linearRgb) {
+  if (!materialOk(material) || !finite(linearRgb)) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  MaterialSettings& m = materials_[size_t(material)];
+  if (m.albedo != linearRgb) {
+    m.albedo = linearRgb;
+    dirty_ |= kDirtyMaterials;  // bounces only
+  }
+  return true;
+}
+
+bool Runtime::setEmission(int material, glm::vec3 linearRgb) {
+  if (!canSetEmission(material) || !finite(linearRgb)) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  MaterialSettings& m = materials_[size_t(material)];
+  if (m.emission != linearRgb) {
+    m.emission = linearRgb;
+    dirty_ |= kDirtyMaterials | kDirtyDirect;
+  }
+  return true;
+}
+
+bool Runtime::setAlbedo(const std::string& name, glm::vec3 linearRgb) {
+  return setAlbedo(findMaterial(name), linearRgb);
+}
+bool Runtime::setEmission(const std::string& name, glm::vec3 linearRgb) {
+  return setEmission(findMaterial(name), linearRgb);
+}
+
+bool Runtime::canSetEmission(int material) const {
+  return materialOk(material) && emissiveMaterial_[size_t(material)] != 0;
+}
+
+glm::vec3 Runtime::albedo(int material) const {
+  if (!materialOk(material)) return glm::vec3(0.0f);
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  return materials_[size_t(material)].albedo;
+}
+glm::vec3 Runtime::emission(int material) const {
+  if (!materialOk(material)) return glm::vec3(0.0f);
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  return materials_[size_t(material)].emission;
+}
+
+bool Runtime::setIndirectIntensity(float scale) {
+  if (!std::isfinite(scale)) return false;
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  if (indirectIntensity_ != scale) {
+    indirectIntensity_ = scale;
+    dirty_ |= kDirtyIndirect;
+  }
+  return true;
+}
+
+float Runtime::indirectIntensity() const {
+  std::lock_guard<std::mutex> lock(settingsMutex_);
+  return indirectIntensity_;
+}
+
+// ---- Solving ----------------------------------------------------------------------------------
+
+UpdateStats Runtime::update(const UpdateOptions& options) {
+  std::lock_guard<std::mutex> updateLock(updateMutex_);
+  const Clock::time_point start = Clock::now();
+  UpdateStats stats;
+
+  // Take the pending settings (element-wise copies into storage sized at load: no allocation).
+  unsigned dirty;
+  {
+    std::lock_guard<std::mutex> lock(settingsMutex_);
+    dirty = dirty_;
+    dirty_ = 0;
+    if (dirty & kDirtyLights)
+      for (size_t i = 0; i < lights_.size(); ++i) {
+        Source& s = data_.sources[lightSource_[i]];
+        s.color = lights_[i].color;
+        s.intensity = lights_[i].intensity;
+        s.bounceIntensity = lights_[i].bounceIntensity;
+        s.enabled = lights_[i].enabled;
+      }
+    if (dirty & kDirtyMaterials)
+      for (size_t m = 0; m < materials_.size(); ++m) {
+        data_.materials[m].albedo = materials_[m].albedo;
+        data_.materials[m].emission = materials_[m].emission;
+      }
+    if (dirty & kDirtySky) std::copy(sky_, sky_ + kShCount, data_.skySh);
+    if (dirty & kDirtyIndirect) data_.indirectIntensity = indirectIntensity_;
+  }
+  if (dirty & (kDirtyLights | kDirtyMaterials | kDirtySky)) solver_->prepare();
+  if (options.fromScratch) solver_->reset();
+
+  // Passes: the same loop as Solver::solve() (so fromScratch matches a bake), plus the budget.
+  const int limit = options.maxBounces > 0 ? options.maxBounces : options.maxBounces == 0 ? 1000 : 0;
+  double lastPassMs = 0.0;
+  while (stats.bounces < limit) {
+    if (options.timeBudgetMs > 0.0 && stats.bounces > 0 &&
+        msSince(start) + lastPassMs + lastOutputMs_ > options.timeBudgetMs)
+      break;
+    const Clock::time_point passStart = Clock::now();
+    stats.change = solver_->iterate();
+    lastPassMs = msSince(passStart);
+    ++stats.bounces;
+    stats.converged = stats.change < options.tolerance;
+    if (options.maxBounces == 0 && stats.converged) break;
+  }
+
+  // Texel values as the bake computes them: direct (sky first, then sources) + indirect.
+  const Clock::time_point outputStart = Clock::now();
+  if (dirty & kDirtyDirect) solver_->directTexels(direct_.data());
+  solver_->indirectTexels(indirect_.data());
+  const int back = 1 - front_;  // front_ is written only here, under updateLock
+  std::vector<glm::vec3>& values = texels_[back];
+  for (size_t t = 0; t < values.size(); ++t) values[t] = direct_[t] + indirect_[t];
+  // resolveAtlas assign()s the image; at its full size already, that never reallocates.
+  for (size_t a = 0; a < data_.atlases.size(); ++a)
+    resolveAtlas(data_.atlases[a], values, images_[back][a]);
+  {
+    std::lock_guard<std::mutex> lock(outputMutex_);
+    front_ = back;
+  }
+  lastOutputMs_ = msSince(outputStart);
+  stats.milliseconds = msSince(start);
+  return stats;
+}
+
+// ---- Output -----------------------------------------------------------------------------------
+
+int Runtime::atlasCount() const { return int(data_.atlases.size()); }
+
+int Runtime::atlasWidth(int atlas) const {
+  return atlas >= 0 && atlas < atlasCount() ? data_.atlases[size_t(atlas)].width : 0;
+}
+
+int Runtime::atlasHeight(int atlas) const {
+  return atlas >= 0 && atlas < atlasCount() ? data_.atlases[size_t(atlas)].height : 0;
+}
+
+bool Runtime::readAtlas(int atlas, float* rgb) const {
+  if (atlas < 0 || atlas >= atlasCount()) return false;
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  const std::vector<glm::vec3>& image = images_[front_][size_t(atlas)];
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "glm::vec3 is three packed floats");
+  std::memcpy(rgb, image.data(), image.size() * sizeof(glm::vec3));
+  return true;
+}
+
+bool Runtime::readAtlas(int atlas, std::vector<glm::vec3>& image) const {
+  if (atlas < 0 || atlas >= atlasCount()) return false;
+  image.resize(size_t(atlasWidth(atlas)) * size_t(atlasHeight(atlas)));
+  return readAtlas(atlas, reinterpret_cast<float*>(image.data()));
+}
+
+int Runtime::texelCount() const { return int(data_.texelCount); }
+
+void Runtime::readTexels(glm::vec3* texels) const {
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  std::copy(texels_[front_].begin(), texels_[front_].end(), texels);
+}
+
+void Runtime::readTexels(float* rgb) const {
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  std::memcpy(rgb, texels_[front_].data(), texels_[front_].size() * sizeof(glm::vec3));
+}
+
+}  // namespace afterglow::runtime

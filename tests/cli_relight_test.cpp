@@ -1,0 +1,133 @@
+// `afterglow relight` run as a user would: a relit sky equals a bake with that sky, file for
+// file; bad names and folders are refused with a message naming them and nothing written; the
+// relit folder renders.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "test_util.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace afterglow::test {
+namespace {
+
+struct CliRun {
+  int exitCode = -1;
+  std::string out, err;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+CliRun runCli(const std::string& dir, const std::string& args) {
+  const std::string out = dir + "/.stdout", err = dir + "/.stderr";
+  const std::string command =
+      std::string("'") + AFTERGLOW_CLI + "' " + args + " >'" + out + "' 2>'" + err + "'";
+  const int status = std::system(command.c_str());
+  CliRun r;
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+std::vector<float> readExr(const std::string& path) {
+  std::vector<float> pixels;
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return pixels;
+  pixels.resize(size_t(in->spec().width) * size_t(in->spec().height) * 3);
+  if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, pixels.data())) pixels.clear();
+  return pixels;
+}
+
+const char* kBake = "--quality draft --texels-per-unit 32 --quiet";
+
+TEST(CliRelight, RelitSkyEqualsABakeWithThatSky) {
+  const std::string dir = tempDir("cli_relight_sky");
+  CliRun bake = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' " + kBake);
+  ASSERT_EQ(bake.exitCode, 0) << bake.err;
+  ASSERT_TRUE(fs::exists(dir + "/out/transport.agt"));
+  CliRun sky = runCli(dir, "bake builtin:cornell -o '" + dir + "/sky' --sky 0.5,0.7,1.4 " + kBake);
+  ASSERT_EQ(sky.exitCode, 0) << sky.err;
+  CliRun relit = runCli(dir, "relight '" + dir + "/out' --sky 0.5,0.7,1.4 -o '" + dir + "/relit'");
+  ASSERT_EQ(relit.exitCode, 0) << relit.err;
+  EXPECT_NE(relit.out.find("bounces"), std::string::npos) << relit.out;
+
+  const std::vector<float> want = readExr(dir + "/sky/lightmaps/lightmap0.exr");
+  const std::vector<float> got = readExr(dir + "/relit/lightmaps/lightmap0.exr");
+  const std::vector<float> before = readExr(dir + "/out/lightmaps/lightmap0.exr");
+  ASSERT_FALSE(want.empty());
+  EXPECT_EQ(got, want);     // the same half floats
+  EXPECT_NE(before, want);  // and the sky did change them
+  EXPECT_TRUE(fs::exists(dir + "/relit/lightmaps/lightmap0.png"));
+
+  // The relit folder is a baked scene to render, lit by the new sky in its report.
+  const json report = json::parse(slurp(dir + "/relit/report.json"));
+  const json skyRecorded = report.at("settings").at("sky");
+  ASSERT_EQ(skyRecorded.size(), 3u);
+  EXPECT_NEAR(skyRecorded[1].get<double>(), 0.7, 1e-6);
+  EXPECT_EQ(report.at("relight").at("changes").size(), 1u);
+  CliRun render = runCli(dir, "render '" + dir + "/relit/scene.gltf' --camera Camera --width 32 "
+                           "--height 24 -o '" + dir + "/view.png' --quiet");
+  EXPECT_EQ(render.exitCode, 0) << render.err;
+  EXPECT_TRUE(fs::exists(dir + "/view.png"));
+}
+
+TEST(CliRelight, BadNamesAndFoldersAreRefusedAndWriteNothing) {
+  const std::string dir = tempDir("cli_relight_errors");
+  CliRun bake = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' " + kBake);
+  ASSERT_EQ(bake.exitCode, 0) << bake.err;
+  const std::string out = "'" + dir + "/out'", relit = " -o '" + dir + "/relit'";
+
+  CliRun light = runCli(dir, "relight " + out + " --light sun=1,0,0" + relit);
+  EXPECT_EQ(light.exitCode, 2);
+  EXPECT_NE(light.err.find("no light 'sun'"), std::string::npos) << light.err;
+
+  CliRun material = runCli(dir, "relight " + out + " --albedo Nope=1,0,0" + relit);
+  EXPECT_EQ(material.exitCode, 2);
+  EXPECT_NE(material.err.find("no material 'Nope'"), std::string::npos) << material.err;
+  EXPECT_NE(material.err.find("materials: "), std::string::npos) << material.err;
+
+  // The white wall was not emissive when baked: its emission was never traced.
+  CliRun emission = runCli(dir, "relight " + out + " --emission '#0=1,1,1'" + relit);
+  EXPECT_EQ(emission.exitCode, 2);
+  EXPECT_NE(emission.err.find("not emissive"), std::string::npos) << emission.err;
+
+  CliRun malformed = runCli(dir, "relight " + out + " --sky 1,2" + relit);
+  EXPECT_EQ(malformed.exitCode, 2);
+
+  CliRun missing = runCli(dir, "relight '" + dir + "/nowhere'" + relit);
+  EXPECT_EQ(missing.exitCode, 1);
+  EXPECT_NE(missing.err.find("nowhere"), std::string::npos) << missing.err;
+
+  // A damaged transport file: the error names it.
+  fs::create_directories(dir + "/broken");
+  for (const char* f : {"report.json", "scene.gltf", "scene.bin"})
+    fs::copy_file(dir + "/out/" + f, dir + "/broken/" + f);
+  std::string bytes = slurp(dir + "/out/transport.agt");
+  bytes.resize(bytes.size() / 2);
+  std::ofstream(dir + "/broken/transport.agt", std::ios::binary) << bytes;
+  CliRun broken = runCli(dir, "relight '" + dir + "/broken'" + relit);
+  EXPECT_EQ(broken.exitCode, 1);
+  EXPECT_NE(broken.err.find("transport.agt"), std::string::npos) << broken.err;
+
+  EXPECT_FALSE(fs::exists(dir + "/relit"));
+}
+
+}  // namespace
+}  // namespace afterglow::test

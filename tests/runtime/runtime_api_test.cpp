@@ -1,0 +1,686 @@
+// The relighting API (runtime/include/afterglow/runtime/runtime.h and afterglow_runtime.h) on a
+// small synthetic transport: bit-exact agreement with the bake's solve, linearity in the
+// sources, the settings' meaning, warm starts, files, threads and the C API. Links
+// afterglow_runtime alone (no baker).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <new>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "afterglow/runtime/runtime.h"
+#include "afterglow/runtime/solver.h"
+#include "afterglow/runtime/transport_file.h"
+#include "afterglow_runtime.h"
+
+// Counts heap allocations on threads that ask for it, to prove update() allocates nothing.
+// Not under sanitizers, whose own operator new must stay.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define AFTERGLOW_COUNT_ALLOCATIONS 0
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
+    __has_feature(memory_sanitizer)
+#define AFTERGLOW_COUNT_ALLOCATIONS 0
+#endif
+#endif
+#ifndef AFTERGLOW_COUNT_ALLOCATIONS
+#define AFTERGLOW_COUNT_ALLOCATIONS 1
+#endif
+namespace {
+std::atomic<long> gAllocations{0};
+thread_local bool gCountAllocations = false;
+}  // namespace
+#if AFTERGLOW_COUNT_ALLOCATIONS
+namespace {
+void* countedAlloc(std::size_t n) {
+  if (gCountAllocations) gAllocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+}  // namespace
+void* operator new(std::size_t n) { return countedAlloc(n); }
+void* operator new[](std::size_t n) { return countedAlloc(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+#endif
+
+// From c_api_compile.c (compiled as C).
+extern "C" int afterglow_test_c_relight(const char* path, float* rgb, size_t float_count,
+                                        char* err, size_t err_size);
+extern "C" int afterglow_test_c_load_fails(const char* path, char* err, size_t err_size);
+
+namespace afterglow::runtime {
+namespace {
+
+struct Rng {
+  uint64_t state;
+  uint32_t next() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return uint32_t(state >> 33);
+  }
+  uint32_t below(uint32_t n) { return n ? next() % n : 0; }
+  float unit() { return float(next() >> 8) / float(1u << 23); }
+};
+
+// A valid transport whose bounces converge: every links row sees at most 80% of its hemisphere,
+// albedos stay below 1, gathers and filters are averages. Lights "key", "fill", "rim"; materials
+// "floor", "wall" and the emissive "lamp"; a sky; two atlases with mixes. `scale` multiplies the
+// texel count and the atlases' sides.
+TransportData makeScene(uint32_t scale = 1, uint64_t seed = 7) {
+  Rng rng{seed};
+  TransportData d;
+  d.texelCount = 60 * scale * scale;
+  d.clusterCount = 20;
+  d.gatherPointCount = 30;
+  const uint32_t backRows = 3, rows = d.gatherPointCount + backRows;
+
+  const int sides[2][2] = {{9, 7}, {5, 4}};
+  for (const auto& side : sides) {
+    AtlasLayout a;
+    a.width = side[0] * int(scale);
+    a.height = side[1] * int(scale);
+    for (int p = 0; p < a.width * a.height; ++p)
+      a.texelOfPixel.push_back(rng.below(6) == 0 ? kNoTexel : rng.below(d.texelCount));
+    for (int p = 0; p < a.width * a.height; p += 3 + int(rng.below(5))) {
+      a.mixPixel.push_back(uint32_t(p));
+      for (uint32_t k = 0, n = 1 + rng.below(3); k < n; ++k) {
+        a.mixTexel.push_back(rng.below(d.texelCount));
+        a.mixWeight.push_back(0.2f + 0.3f * rng.unit());
+      }
+      a.mixStart.push_back(uint32_t(a.mixTexel.size()));
+    }
+    d.atlases.push_back(std::move(a));
+  }
+
+  d.materials.push_back({"floor", glm::vec3(0.5f, 0.6f, 0.7f), glm::vec3(0.0f)});
+  d.materials.push_back({"wall", glm::vec3(0.7f), glm::vec3(0.0f)});
+  d.materials.push_back({"lamp", glm::vec3(0.6f), glm::vec3(5.0f, 4.0f, 3.0f)});
+
+  const char* names[3] = {"key", "fill", "rim"};
+  const glm::vec3 colors[3] = {{1.0f, 0.9f, 0.8f}, {0.3f, 0.4f, 1.0f}, {1.0f, 0.5f, 0.2f}};
+  for (int i = 0; i < 4; ++i) {
+    Source s;
+    s.name = i < 3 ? names[i] : "lamp";
+    s.kind = i < 3 ? SourceKind::Light : SourceKind::Emissive;
+    s.material = i < 3 ? 0u : 2u;
+    if (i < 3) {
+      s.color = colors[i];
+      s.intensity = 1.5f + float(i);
+      s.bounceIntensity = i == 2 ? 0.5f : 1.0f;
+    }
+    for (uint32_t t = 0; t < d.texelCount; ++t)
+      s.texelTransfer.push_back(rng.below(4) == 0 ? 0.0f : rng.unit());
+    for (uint32_t c = 0; c < d.clusterCount; ++c) s.clusterTransfer.push_back(rng.unit());
+    d.sources.push_back(std::move(s));
+  }
+  // Insert the emissive source between lights, so light indices differ from source indices.
+  std::swap(d.sources[1], d.sources[3]);
+  std::swap(d.sources[2], d.sources[3]);  // order: key, lamp, fill, rim
+
+  for (uint32_t c = 0; c < d.clusterCount; ++c) {
+    d.clusterMaterial.push_back(rng.below(3));
+    d.clusterAlbedoTexture.push_back(glm::vec3(0.5f + 0.5f * rng.unit()));
+    d.clusterEmissionTexture.push_back(glm::vec3(1.0f));
+  }
+
+  std::vector<uint32_t> cols;
+  std::vector<float> w;
+  for (uint32_t r = 0; r < rows; ++r) {
+    cols.clear();
+    w.clear();
+    float sum = 0.0f;
+    for (uint32_t c = rng.below(3); c < d.clusterCount; c += 1 + rng.below(4)) {
+      cols.push_back(c);
+      w.push_back(0.1f + rng.unit());
+      sum += w.back();
+    }
+    for (float& x : w) x *= 0.8f / sum;
+    d.links.appendRow(cols.data(), w.data(), cols.size());
+  }
+  // Rows of a sparse matrix mixing `count` random columns with weights summing to 1.
+  auto average = [&](SparseMatrix& m, uint32_t rowCount, uint32_t columns, uint32_t count) {
+    for (uint32_t r = 0; r < rowCount; ++r) {
+      cols.clear();
+      w.clear();
+      for (uint32_t k = 0; k < count; ++k) {
+        cols.push_back(rng.below(columns));
+        w.push_back(1.0f / float(count));
+      }
+      m.appendRow(cols.data(), w.data(), cols.size());
+    }
+  };
+  average(d.clusterGather, d.clusterCount, rows, 2);
+  average(d.pointFilter, d.gatherPointCount, d.gatherPointCount, 3);
+  d.filterPasses = 1;
+  average(d.texelGather, d.texelCount, d.gatherPointCount, 2);
+
+  for (uint32_t i = 0; i < d.texelCount * kShCount; ++i)
+    d.texelSky.push_back(floatToHalf(i % kShCount == 0 ? 0.3f * rng.unit() : 0.05f * rng.unit()));
+  for (uint32_t i = 0; i < d.clusterCount * kShCount; ++i)
+    d.clusterSky.push_back(i % kShCount == 0 ? 0.3f * rng.unit() : 0.05f * rng.unit());
+  for (int i = 0; i < kShCount; ++i) d.skySh[i] = glm::vec3(0.2f, 0.3f, 0.5f) * (i == 0 ? 1.0f : 0.1f);
+  d.indirectIntensity = 1.0f;
+  d.albedoBoost = 1.0f;
+  EXPECT_EQ(d.validate(), "");
+  return d;
+}
+
+std::unique_ptr<Runtime> make(TransportData d) {
+  std::string error;
+  auto rt = Runtime::fromData(std::move(d), &error);
+  EXPECT_TRUE(rt) << error;
+  return rt;
+}
+
+std::vector<glm::vec3> texels(const Runtime& rt) {
+  std::vector<glm::vec3> t(size_t(rt.texelCount()));
+  rt.readTexels(t.data());
+  return t;
+}
+
+std::vector<std::vector<glm::vec3>> atlases(const Runtime& rt) {
+  std::vector<std::vector<glm::vec3>> out(size_t(rt.atlasCount()));
+  for (int a = 0; a < rt.atlasCount(); ++a) EXPECT_TRUE(rt.readAtlas(a, out[size_t(a)]));
+  return out;
+}
+
+// What baker/src/bake.cpp does with a transport: solve, gather, sum, resolve.
+std::vector<std::vector<glm::vec3>> bake(const TransportData& d, const SolveOptions& options) {
+  Solver solver(d);
+  solver.solve(options);
+  std::vector<glm::vec3> direct, indirect;
+  solver.gatherTexels(direct, indirect);
+  std::vector<glm::vec3> values(direct.size());
+  for (size_t t = 0; t < values.size(); ++t) values[t] = direct[t] + indirect[t];
+  std::vector<std::vector<glm::vec3>> images;
+  for (const AtlasLayout& layout : d.atlases) {
+    images.emplace_back();
+    resolveAtlas(layout, values, images.back());
+  }
+  return images;
+}
+
+bool bitEqual(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::vec3)) == 0;
+}
+bool bitEqual(const std::vector<std::vector<glm::vec3>>& a,
+              const std::vector<std::vector<glm::vec3>>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (!bitEqual(a[i], b[i])) return false;
+  return true;
+}
+
+float maxComponent(const std::vector<glm::vec3>& v) {
+  float m = 0.0f;
+  for (const glm::vec3& x : v) m = std::max({m, std::abs(x.x), std::abs(x.y), std::abs(x.z)});
+  return m;
+}
+
+// |a - b| within rel of b per component, plus a floor against the largest value.
+void expectNear(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b, float rel,
+                const char* what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  const float floor = 1e-6f * maxComponent(b);
+  for (size_t t = 0; t < a.size(); ++t)
+    for (int c = 0; c < 3; ++c)
+      ASSERT_LE(std::abs(a[t][c] - b[t][c]), rel * std::abs(b[t][c]) + floor)
+          << what << ": texel " << t << " channel " << c << ": " << a[t][c] << " vs " << b[t][c];
+}
+
+UpdateOptions scratch(int bounces, float tolerance = 1e-3f) {
+  UpdateOptions o;
+  o.maxBounces = bounces;
+  o.tolerance = tolerance;
+  o.fromScratch = true;
+  return o;
+}
+
+// No sky and no emission: the texels are linear in the lights alone.
+std::unique_ptr<Runtime> lightsOnly(uint32_t scale = 1) {
+  auto rt = make(makeScene(scale));
+  rt->setSky(glm::vec3(0.0f));
+  rt->setEmission("lamp", glm::vec3(0.0f));
+  return rt;
+}
+
+// ---- Agreement with the bake ------------------------------------------------------------------
+
+TEST(RuntimeApi, FromScratchMatchesTheBakeBitForBit) {
+  const TransportData d = makeScene();
+  for (int bounces : {0, 1, 5}) {
+    auto rt = make(d);
+    const UpdateStats s = rt->update(scratch(bounces));
+    SolveOptions o;
+    o.maxBounces = bounces;
+    EXPECT_TRUE(bitEqual(atlases(*rt), bake(d, o))) << bounces << " bounces";
+    if (bounces > 0) EXPECT_EQ(s.bounces, bounces);
+    else EXPECT_TRUE(s.converged);
+  }
+}
+
+TEST(RuntimeApi, RelitFromScratchEqualsAFreshRuntimeAndBakeWithTheSettingsBakedIn) {
+  TransportData changed = makeScene();
+  auto rt = make(changed);
+  rt->update();  // a warm solution with the old settings, to be thrown away
+  ASSERT_TRUE(rt->setLightColor("key", glm::vec3(0.2f, 1.0f, 0.3f)));
+  ASSERT_TRUE(rt->setLightIntensity(1, 7.0f));
+  ASSERT_TRUE(rt->setBounceIntensity("key", 2.0f));
+  ASSERT_TRUE(rt->setLightEnabled("rim", false));
+  ASSERT_TRUE(rt->setAlbedo("wall", glm::vec3(0.2f, 0.5f, 0.9f)));
+  ASSERT_TRUE(rt->setEmission("lamp", glm::vec3(1.0f, 8.0f, 2.0f)));
+  ASSERT_TRUE(rt->setSky(glm::vec3(0.4f, 0.1f, 0.2f)));
+  ASSERT_TRUE(rt->setIndirectIntensity(1.5f));
+  rt->update(scratch(0, 1e-4f));
+
+  // The same settings written straight into the transport (key, lamp, fill, rim).
+  changed.sources[0].color = glm::vec3(0.2f, 1.0f, 0.3f);
+  changed.sources[2].intensity = 7.0f;
+  changed.sources[0].bounceIntensity = 2.0f;
+  changed.sources[3].enabled = false;
+  changed.materials[1].albedo = glm::vec3(0.2f, 0.5f, 0.9f);
+  changed.materials[2].emission = glm::vec3(1.0f, 8.0f, 2.0f);
+  constantSkySh(glm::vec3(0.4f, 0.1f, 0.2f), changed.skySh);
+  changed.indirectIntensity = 1.5f;
+  auto fresh = make(changed);
+  fresh->update(scratch(0, 1e-4f));
+  EXPECT_TRUE(bitEqual(atlases(*rt), atlases(*fresh)));
+  EXPECT_TRUE(bitEqual(texels(*rt), texels(*fresh)));
+  SolveOptions o;
+  o.tolerance = 1e-4f;
+  EXPECT_TRUE(bitEqual(atlases(*rt), bake(changed, o)));
+  // data() shows the applied settings.
+  EXPECT_EQ(rt->data().sources[3].enabled, false);
+  EXPECT_EQ(rt->data().materials[2].emission, glm::vec3(1.0f, 8.0f, 2.0f));
+}
+
+// ---- Linearity and the settings' meaning ------------------------------------------------------
+
+TEST(RuntimeApi, ScalingEveryLightScalesEveryTexel) {
+  auto base = lightsOnly();
+  base->update(scratch(20));
+  auto scaled = lightsOnly();
+  const float k = 2.5f;
+  for (int i = 0; i < scaled->lightCount(); ++i)
+    ASSERT_TRUE(scaled->setLightIntensity(i, k * scaled->lightIntensity(i)));
+  scaled->update(scratch(20));
+  std::vector<glm::vec3> expected = texels(*base);
+  ASSERT_GT(maxComponent(expected), 0.0f);
+  for (glm::vec3& v : expected) v *= k;
+  expectNear(texels(*scaled), expected, 1e-5f, "k x lights");
+}
+
+TEST(RuntimeApi, SingleLightSolvesAddUpToTheTwoLightSolve) {
+  auto only = [](const char* on) {
+    auto rt = lightsOnly();
+    for (int i = 0; i < rt->lightCount(); ++i) rt->setLightEnabled(i, rt->lightName(i) == on);
+    rt->update(scratch(20));
+    return texels(*rt);
+  };
+  auto both = lightsOnly();
+  both->setLightEnabled("rim", false);
+  both->update(scratch(20));
+  std::vector<glm::vec3> sum = only("key"), fill = only("fill");
+  for (size_t t = 0; t < sum.size(); ++t) sum[t] += fill[t];
+  expectNear(texels(*both), sum, 1e-5f, "key + fill");
+}
+
+TEST(RuntimeApi, DisabledLightEqualsZeroIntensity) {
+  auto disabled = make(makeScene());
+  auto zero = make(makeScene());
+  ASSERT_TRUE(disabled->setLightEnabled("fill", false));
+  ASSERT_TRUE(zero->setLightIntensity("fill", 0.0f));
+  disabled->update(scratch(0));
+  zero->update(scratch(0));
+  EXPECT_TRUE(bitEqual(atlases(*disabled), atlases(*zero)));
+  EXPECT_FALSE(disabled->lightEnabled(disabled->findLight("fill")));
+}
+
+TEST(RuntimeApi, ZeroBounceIntensityLeavesOnlyTheLightsDirectLight) {
+  auto rt = lightsOnly();
+  const int key = rt->findLight("key");
+  for (int i = 0; i < rt->lightCount(); ++i) rt->setLightEnabled(i, i == key);
+  ASSERT_TRUE(rt->setBounceIntensity(key, 0.0f));
+  rt->update(scratch(20));
+  const Source& s = rt->data().sources[0];
+  ASSERT_EQ(s.name, "key");
+  const glm::vec3 scale = s.color * s.intensity;
+  const std::vector<glm::vec3> t = texels(*rt);
+  for (size_t i = 0; i < t.size(); ++i) ASSERT_EQ(t[i], scale * s.texelTransfer[i]) << i;
+  // With bounces the same light does add indirect light.
+  rt->setBounceIntensity(key, 1.0f);
+  rt->update(scratch(20));
+  const std::vector<glm::vec3> bounced = texels(*rt);
+  float extra = 0.0f;
+  for (size_t i = 0; i < t.size(); ++i) extra = std::max(extra, bounced[i].x - t[i].x);
+  EXPECT_GT(extra, 1e-3f);
+}
+
+TEST(RuntimeApi, IndirectIntensityScalesBouncedLightWithoutAPass) {
+  auto rt = make(makeScene());
+  rt->update(scratch(0));
+  const std::vector<glm::vec3> one = texels(*rt);
+  rt->setIndirectIntensity(0.0f);
+  EXPECT_EQ(rt->update(scratch(-1)).bounces, 0);  // reset, no pass: direct light only
+  rt->setIndirectIntensity(1.0f);
+  EXPECT_EQ(rt->update(UpdateOptions{-1}).bounces, 0);
+  const std::vector<glm::vec3> direct = texels(*rt);
+  rt->setIndirectIntensity(3.0f);
+  rt->update(scratch(0));
+  const std::vector<glm::vec3> three = texels(*rt);
+  std::vector<glm::vec3> expected(one.size());
+  for (size_t t = 0; t < one.size(); ++t) expected[t] = direct[t] + 3.0f * (one[t] - direct[t]);
+  expectNear(three, expected, 1e-5f, "indirect x3");
+  EXPECT_GT(maxComponent(three), maxComponent(one));
+}
+
+TEST(RuntimeApi, EmissionDrivesTheEmissiveSource) {
+  auto rt = lightsOnly();
+  for (int i = 0; i < rt->lightCount(); ++i) rt->setLightEnabled(i, false);
+  rt->update(scratch(5));
+  EXPECT_EQ(maxComponent(texels(*rt)), 0.0f);
+  ASSERT_TRUE(rt->setEmission("lamp", glm::vec3(2.0f)));
+  rt->update(scratch(5));
+  const std::vector<glm::vec3> two = texels(*rt);
+  ASSERT_TRUE(rt->setEmission("lamp", glm::vec3(4.0f)));
+  rt->update(scratch(5));
+  std::vector<glm::vec3> expected = two;
+  for (glm::vec3& v : expected) v *= 2.0f;
+  EXPECT_GT(maxComponent(two), 0.0f);
+  expectNear(texels(*rt), expected, 1e-5f, "emission x2");
+}
+
+// ---- Warm starts and budgets ------------------------------------------------------------------
+
+TEST(RuntimeApi, WarmStartConvergesToTheColdAnswer) {
+  auto warm = make(makeScene());
+  warm->update(scratch(0, 1e-6f));
+  warm->setLightColor("key", glm::vec3(1.0f, 0.2f, 0.1f));
+  warm->setAlbedo("floor", glm::vec3(0.3f));
+  UpdateOptions o;
+  o.tolerance = 1e-6f;
+  const UpdateStats ws = warm->update(o);
+  EXPECT_TRUE(ws.converged);
+
+  auto cold = make(makeScene());
+  cold->setLightColor("key", glm::vec3(1.0f, 0.2f, 0.1f));
+  cold->setAlbedo("floor", glm::vec3(0.3f));
+  const UpdateStats cs = cold->update(scratch(0, 1e-6f));
+  EXPECT_LE(ws.bounces, cs.bounces);
+  expectNear(texels(*warm), texels(*cold), 1e-4f, "warm vs cold");
+
+  // Nothing changed: one more warm pass barely moves it.
+  const UpdateStats again = warm->update(UpdateOptions{1});
+  EXPECT_EQ(again.bounces, 1);
+  EXPECT_LT(again.change, 1e-5f);
+}
+
+TEST(RuntimeApi, TimeBudgetRunsAtLeastOnePass) {
+  auto rt = make(makeScene());
+  UpdateOptions o;
+  o.timeBudgetMs = 1e-9;  // smaller than any pass
+  o.fromScratch = true;
+  const UpdateStats s = rt->update(o);
+  EXPECT_EQ(s.bounces, 1);
+  EXPECT_FALSE(s.converged);
+  EXPECT_GT(s.milliseconds, 0.0);
+  o.timeBudgetMs = 1e6;  // ample
+  EXPECT_TRUE(rt->update(o).converged);
+}
+
+TEST(RuntimeApi, BlackBeforeTheFirstUpdate) {
+  auto rt = make(makeScene());
+  EXPECT_EQ(maxComponent(texels(*rt)), 0.0f);
+  for (const auto& image : atlases(*rt)) EXPECT_EQ(maxComponent(image), 0.0f);
+  rt->update();
+  EXPECT_GT(maxComponent(texels(*rt)), 0.0f);
+}
+
+// Heap allocations made on this thread by f().
+template <class F>
+long allocationsOf(F&& f) {
+  gAllocations = 0;
+  gCountAllocations = true;
+  f();
+  gCountAllocations = false;
+  return gAllocations.load();
+}
+
+// Neither update() nor the Solver calls it makes allocate once the runtime is loaded: an
+// engine calls them every frame.
+TEST(RuntimeApi, UpdateDoesNotAllocate) {
+  if (!AFTERGLOW_COUNT_ALLOCATIONS) GTEST_SKIP() << "allocations are not counted under sanitizers";
+  const TransportData d = makeScene();
+  Solver solver(d);
+  glm::vec3 scratchTexels[64];
+  ASSERT_LE(d.texelCount, 64u);
+  EXPECT_EQ(allocationsOf([&] { solver.iterate(); }), 0);
+  EXPECT_EQ(allocationsOf([&] { solver.directTexels(scratchTexels); }), 0);
+  EXPECT_EQ(allocationsOf([&] { solver.indirectTexels(scratchTexels); }), 0);
+
+  auto rt = make(makeScene());
+  rt->update();
+  std::vector<glm::vec3> image(size_t(rt->atlasWidth(0) * rt->atlasHeight(0)));
+  const std::string key = "key";
+  const long counted = allocationsOf([&] {
+    for (int frame = 0; frame < 5; ++frame) {
+      rt->setLightColor(key, glm::vec3(1.0f, 0.1f * float(frame), 0.5f));
+      rt->setAlbedo(0, glm::vec3(0.1f * float(frame)));
+      rt->setSky(glm::vec3(0.01f * float(frame)));
+      rt->setEmission(2, glm::vec3(float(frame)));
+      rt->update(UpdateOptions{1});  // direct light changed
+      rt->update(scratch(0));        // nothing changed
+      rt->readAtlas(0, image);
+      rt->readAtlas(1, &image[0].x);
+    }
+  });
+  EXPECT_EQ(counted, 0);
+}
+
+// ---- Lookups and refusals ---------------------------------------------------------------------
+
+TEST(RuntimeApi, LookupsAndRefusals) {
+  auto rt = make(makeScene());
+  EXPECT_EQ(rt->lightCount(), 3);
+  EXPECT_EQ(rt->lightName(0), "key");
+  EXPECT_EQ(rt->lightName(1), "fill");  // the emissive source between them is not a light
+  EXPECT_EQ(rt->findLight("rim"), 2);
+  EXPECT_EQ(rt->findLight("lamp"), -1);
+  EXPECT_EQ(rt->findLight(""), -1);
+  EXPECT_EQ(rt->lightName(3), "");
+  EXPECT_EQ(rt->materialCount(), 3);
+  EXPECT_EQ(rt->findMaterial("lamp"), 2);
+  EXPECT_EQ(rt->findMaterial("nope"), -1);
+  EXPECT_EQ(rt->materialName(-1), "");
+
+  EXPECT_FALSE(rt->setLightColor("nope", glm::vec3(1.0f)));
+  EXPECT_FALSE(rt->setLightColor(3, glm::vec3(1.0f)));
+  EXPECT_FALSE(rt->setLightColor(-1, glm::vec3(1.0f)));
+  EXPECT_FALSE(rt->setLightIntensity("nope", 1.0f));
+  EXPECT_FALSE(rt->setBounceIntensity("nope", 1.0f));
+  EXPECT_FALSE(rt->setLightEnabled("nope", false));
+  EXPECT_FALSE(rt->setAlbedo("nope", glm::vec3(0.5f)));
+  EXPECT_FALSE(rt->setEmission("nope", glm::vec3(0.5f)));
+  EXPECT_FALSE(rt->setLightIntensity(0, std::nanf("")));
+  EXPECT_FALSE(rt->setLightColor(0, glm::vec3(INFINITY, 0.0f, 0.0f)));
+  EXPECT_FALSE(rt->setSky(glm::vec3(NAN)));
+  EXPECT_FALSE(rt->setIndirectIntensity(NAN));
+  EXPECT_EQ(rt->lightIntensity(0), 1.5f);  // unchanged by the refusals
+
+  // Emission only for materials with an emissive source at bake time.
+  EXPECT_TRUE(rt->canSetEmission(2));
+  EXPECT_FALSE(rt->canSetEmission(0));
+  EXPECT_FALSE(rt->canSetEmission(3));
+  EXPECT_FALSE(rt->setEmission("floor", glm::vec3(1.0f)));
+  EXPECT_EQ(rt->emission(0), glm::vec3(0.0f));
+  EXPECT_TRUE(rt->setEmission("lamp", glm::vec3(1.0f, 2.0f, 3.0f)));
+  EXPECT_EQ(rt->emission(2), glm::vec3(1.0f, 2.0f, 3.0f));
+
+  EXPECT_TRUE(rt->setLightColor("fill", glm::vec3(0.5f)));
+  EXPECT_EQ(rt->lightColor(1), glm::vec3(0.5f));
+  glm::vec3 sh[kShCount];
+  rt->setSky(glm::vec3(1.0f));
+  rt->skySh(sh);
+  EXPECT_GT(sh[0].x, 3.0f);
+  EXPECT_EQ(sh[1], glm::vec3(0.0f));
+
+  EXPECT_EQ(rt->atlasCount(), 2);
+  EXPECT_EQ(rt->atlasWidth(0), 9);
+  EXPECT_EQ(rt->atlasHeight(1), 4);
+  EXPECT_EQ(rt->atlasWidth(2), 0);
+  std::vector<glm::vec3> image;
+  EXPECT_FALSE(rt->readAtlas(2, image));
+}
+
+TEST(RuntimeApi, InvalidDataIsRefused) {
+  TransportData d = makeScene();
+  d.clusterMaterial[3] = 9;
+  std::string error;
+  EXPECT_EQ(Runtime::fromData(std::move(d), &error), nullptr);
+  EXPECT_NE(error.find("cluster 3"), std::string::npos) << error;
+}
+
+// ---- Files ------------------------------------------------------------------------------------
+
+std::string tempPath(const char* name) {
+  return (std::filesystem::path(::testing::TempDir()) / name).string();
+}
+
+TEST(RuntimeApi, LoadingAMissingFileNamesIt) {
+  const std::string path = tempPath("afterglow_runtime_api_missing.agt");
+  std::filesystem::remove(path);
+  std::string error;
+  EXPECT_EQ(Runtime::load(path, &error), nullptr);
+  EXPECT_EQ(error.rfind(path, 0), 0u) << error;
+  EXPECT_EQ(error.find('\n'), std::string::npos);
+}
+
+TEST(RuntimeApi, SavedAndLoadedTransportRelightsLikeTheOriginal) {
+  const TransportData d = makeScene();
+  const std::string path = tempPath("afterglow_runtime_api_roundtrip.agt");
+  std::string error;
+  ASSERT_TRUE(saveTransport(d, path, &error)) << error;
+  auto loaded = Runtime::load(path, &error);
+  std::filesystem::remove(path);
+  ASSERT_TRUE(loaded) << error;
+  auto inMemory = make(d);
+  for (Runtime* rt : {loaded.get(), inMemory.get()}) {
+    rt->setLightColor("rim", glm::vec3(0.1f, 0.9f, 0.4f));
+    rt->setEmission("lamp", glm::vec3(3.0f));
+    rt->update();
+    rt->update(UpdateOptions{2});
+  }
+  EXPECT_TRUE(bitEqual(atlases(*loaded), atlases(*inMemory)));
+  EXPECT_TRUE(bitEqual(texels(*loaded), texels(*inMemory)));
+}
+
+// ---- Threads ----------------------------------------------------------------------------------
+
+// One thread relights and updates; another reads atlases and texels throughout. Every frame is
+// the base frame times an integer k (all lights scaled alike, no sky or emission), so a read
+// that mixed two frames would show two different ratios.
+TEST(RuntimeApi, ReadsSeeWholeFramesWhileUpdating) {
+  auto rt = lightsOnly(20);  // big enough that a torn read would be caught
+  std::vector<glm::vec3> colors;
+  for (int i = 0; i < rt->lightCount(); ++i) colors.push_back(rt->lightColor(i));
+  rt->update(scratch(4));
+  const std::vector<std::vector<glm::vec3>> base = atlases(*rt);
+  const std::vector<glm::vec3> baseTexels = texels(*rt);
+
+  // The k of a frame, or -1 when its pixels disagree.
+  auto frameScale = [](const std::vector<glm::vec3>& image, const std::vector<glm::vec3>& ref) {
+    const float floor = 1e-3f * maxComponent(ref);
+    int k = 0;
+    for (size_t p = 0; p < image.size(); ++p)
+      for (int c = 0; c < 3; ++c) {
+        if (std::abs(ref[p][c]) <= floor) continue;
+        const float ratio = image[p][c] / ref[p][c];
+        const int rounded = int(std::lround(ratio));
+        if (std::abs(ratio - float(rounded)) > 1e-4f * float(rounded) || rounded < 1) return -1;
+        if (k == 0) k = rounded;
+        if (rounded != k) return -1;
+      }
+    return k;
+  };
+
+  const int frames = 200;
+  std::atomic<bool> done{false};
+  std::atomic<int> reads{0}, bad{0};
+  std::thread reader([&] {
+    std::vector<glm::vec3> image, t(baseTexels.size());
+    int seen = 0;
+    while (!done.load() || seen < 5) {
+      for (int a = 0; a < rt->atlasCount(); ++a) {
+        rt->readAtlas(a, image);
+        if (frameScale(image, base[size_t(a)]) < 0) ++bad;
+      }
+      rt->readTexels(t.data());
+      if (frameScale(t, baseTexels) < 0) ++bad;
+      ++reads;
+      ++seen;
+    }
+  });
+  for (int f = 0; f < frames; ++f) {
+    const float k = float(1 + f % 5);
+    for (int i = 0; i < rt->lightCount(); ++i) rt->setLightColor(i, k * colors[size_t(i)]);
+    rt->update(scratch(4));
+  }
+  done = true;
+  reader.join();
+  EXPECT_EQ(bad.load(), 0) << "of " << reads.load() << " reads";
+  EXPECT_GE(reads.load(), 5);
+}
+
+// ---- C API ------------------------------------------------------------------------------------
+
+TEST(RuntimeApi, CApiMatchesTheCppApi) {
+  const std::string path = tempPath("afterglow_runtime_api_c.agt");
+  std::string error;
+  ASSERT_TRUE(saveTransport(makeScene(), path, &error)) << error;
+
+  // The same calls as afterglow_test_c_relight (c_api_compile.c) makes, through C++.
+  auto rt = Runtime::load(path, &error);
+  ASSERT_TRUE(rt) << error;
+  const int fill = rt->findLight("fill");
+  rt->setLightColor(fill, glm::vec3(0.25f, 0.5f, 2.0f));
+  rt->setLightIntensity(fill, 3.0f);
+  rt->setBounceIntensity(0, 0.5f);
+  rt->setLightEnabled(2, false);
+  rt->setSky(glm::vec3(0.1f, 0.2f, 0.3f));
+  rt->setAlbedo("wall", glm::vec3(0.3f, 0.4f, 0.5f));
+  rt->setEmission("lamp", glm::vec3(1.0f, 2.0f, 3.0f));
+  rt->setIndirectIntensity(1.25f);
+  rt->update(scratch(4));
+  std::vector<float> expected(size_t(rt->atlasWidth(0) * rt->atlasHeight(0) * 3));
+  ASSERT_TRUE(rt->readAtlas(0, expected.data()));
+
+  std::vector<float> fromC(expected.size(), -1.0f);
+  char err[256] = "untouched";
+  EXPECT_EQ(afterglow_test_c_relight(path.c_str(), fromC.data(), fromC.size(), err, sizeof err), 1)
+      << err;
+  std::filesystem::remove(path);
+  EXPECT_EQ(std::memcmp(fromC.data(), expected.data(), expected.size() * sizeof(float)), 0);
+
+  // Errors name the file, truncated to the buffer.
+  char small[12];
+  EXPECT_EQ(afterglow_test_c_load_fails(path.c_str(), small, sizeof small), 1);
+  EXPECT_EQ(std::string(small), path.substr(0, sizeof small - 1));
+  char full[512];
+  EXPECT_EQ(afterglow_test_c_load_fails(path.c_str(), full, sizeof full), 1);
+  EXPECT_EQ(std::string(full).rfind(path, 0), 0u) << full;
+  EXPECT_EQ(afterglow_runtime_load(nullptr, full, sizeof full), nullptr);
+  EXPECT_EQ(afterglow_runtime_light_count(nullptr), 0);
+  EXPECT_EQ(afterglow_runtime_update(nullptr, nullptr, nullptr), 0);
+}
+
+}  // namespace
+}  // namespace afterglow::runtime
