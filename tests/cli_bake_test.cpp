@@ -32,32 +32,6 @@ using nlohmann::json;
 namespace afterglow::test {
 namespace {
 
-struct BakeRun {
-  int exitCode = -1;
-  std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-BakeRun runCli(const std::string& dir, const std::string& args) {
-  const std::string out = dir + "/.stdout", err = dir + "/.stderr";
-  const std::string command =
-      std::string("'") + AFTERGLOW_CLI + "' " + args + " >'" + out + "' 2>'" + err + "'";
-  const int status = std::system(command.c_str());
-  BakeRun r;
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  fs::remove(out);
-  fs::remove(err);
-  return r;
-}
-
 // Every file under dir, relative, sorted.
 std::vector<std::string> tree(const std::string& dir) {
   std::vector<std::string> names;
@@ -119,7 +93,7 @@ const std::string& bakedCornell() {
   static const std::string out = [] {
     const std::string dir = tempDir("cli_bake_cornell");
     const std::string o = dir + "/out";
-    BakeRun r = runCli(dir, "bake builtin:cornell -o '" + o +
+    CliRun r = runCli(dir, "bake builtin:cornell -o '" + o +
                             "' --quality draft --texels-per-unit 48 --quiet");
     EXPECT_EQ(r.exitCode, 0) << r.err;
     return o;
@@ -187,7 +161,7 @@ TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
 
 TEST(CliBake, OverTheMemoryBudgetRefusesAndWritesNothing) {
   const std::string dir = tempDir("cli_bake_budget");
-  BakeRun r = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --memory-budget 0.000001");
+  CliRun r = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --memory-budget 0.000001");
   EXPECT_EQ(r.exitCode, 1);
   EXPECT_NE(r.err.find("--yes"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("--memory-budget"), std::string::npos) << r.err;
@@ -202,7 +176,7 @@ TEST(CliBake, SettingsFileOverridesThePresetAndTheCommandLineOverridesBoth) {
     s << R"({"quality": "draft", "texel-rays": 8, "cluster-rays": 16, "texels-per-unit": 16,
             "sky": [0.1, 0.2, 0.3]})";
   }
-  BakeRun r = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --settings '" + dir +
+  CliRun r = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --settings '" + dir +
                           "/settings.json' --cluster-rays 24 --quiet");
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const json settings = json::parse(slurp(dir + "/out/report.json")).at("settings");
@@ -215,7 +189,7 @@ TEST(CliBake, SettingsFileOverridesThePresetAndTheCommandLineOverridesBoth) {
   EXPECT_FLOAT_EQ(settings.at("sky").at(2).get<float>(), 0.3f);
 
   std::ofstream(dir + "/bad.json") << R"({"no-such-setting": 1})";
-  BakeRun bad = runCli(dir, "bake builtin:cornell -o '" + dir + "/out2' --settings '" + dir +
+  CliRun bad = runCli(dir, "bake builtin:cornell -o '" + dir + "/out2' --settings '" + dir +
                             "/bad.json'");
   EXPECT_EQ(bad.exitCode, 2);
   EXPECT_NE(bad.err.find("no-such-setting"), std::string::npos) << bad.err;
@@ -247,14 +221,14 @@ TEST(CliBake, CtrlCExits130AndWritesNothing) {
 
 TEST(CliBake, HelpListsTheOptions) {
   const std::string dir = tempDir("cli_bake_help");
-  BakeRun bake = runCli(dir, "bake --help");
+  CliRun bake = runCli(dir, "bake --help");
   EXPECT_EQ(bake.exitCode, 0);
   for (const char* option : {"--quality", "--memory-budget", "--settings", "--yes", "--sky"})
     EXPECT_NE(bake.out.find(option), std::string::npos) << option;
-  BakeRun render = runCli(dir, "help render");
+  CliRun render = runCli(dir, "help render");
   EXPECT_EQ(render.exitCode, 0);
   EXPECT_NE(render.out.find("Usage: afterglow render"), std::string::npos) << render.out;
-  BakeRun missing = runCli(dir, "bake builtin:cornell");
+  CliRun missing = runCli(dir, "bake builtin:cornell");
   EXPECT_EQ(missing.exitCode, 2);
   EXPECT_NE(missing.err.find("-o"), std::string::npos) << missing.err;
 }
@@ -262,7 +236,7 @@ TEST(CliBake, HelpListsTheOptions) {
 TEST(CliRender, WritesAPictureOfTheRequestedSize) {
   const std::string out = bakedCornell();
   const std::string dir = tempDir("cli_render");
-  BakeRun r = runCli(dir, "render '" + out + "/scene.gltf' --camera Camera --width 64 --height 48 "
+  CliRun r = runCli(dir, "render '" + out + "/scene.gltf' --camera Camera --width 64 --height 48 "
                           "-o '" + dir + "/view.png' --quiet");
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const Picture view = readPng(dir + "/view.png");
@@ -273,13 +247,13 @@ TEST(CliRender, WritesAPictureOfTheRequestedSize) {
   EXPECT_GT(view.at(12, 24, 0), view.at(12, 24, 1) + 20);  // red wall
   EXPECT_GT(view.at(52, 24, 1), view.at(52, 24, 0) + 20);  // green wall
 
-  BakeRun noCamera = runCli(dir, "render '" + out + "/scene.gltf' --camera Nope -o '" + dir +
+  CliRun noCamera = runCli(dir, "render '" + out + "/scene.gltf' --camera Nope -o '" + dir +
                                  "/none.png'");
   EXPECT_EQ(noCamera.exitCode, 1);
   EXPECT_NE(noCamera.err.find("Camera"), std::string::npos) << noCamera.err;
   EXPECT_FALSE(fs::exists(dir + "/none.png"));
 
-  BakeRun lookAt = runCli(dir, "render '" + out + "/scene.gltf' --look-from 0.278,0.273,-0.8 "
+  CliRun lookAt = runCli(dir, "render '" + out + "/scene.gltf' --look-from 0.278,0.273,-0.8 "
                                "--look-at 0.278,0.273,0 --fov 40 --width 32 --height 32 -o '" +
                                dir + "/look.png' --quiet");
   EXPECT_EQ(lookAt.exitCode, 0) << lookAt.err;
@@ -296,10 +270,10 @@ TEST(CliRender, ReferenceAgreesWithTheBakedRender) {
   const std::string dir = tempDir("cli_render_reference");
   const std::string view = "render '" + out + "/scene.gltf' --camera Camera --width 64 "
                            "--height 48 --exposure 2 ";
-  BakeRun baked = runCli(dir, view + "-o '" + dir + "/baked.png'");
+  CliRun baked = runCli(dir, view + "-o '" + dir + "/baked.png'");
   ASSERT_EQ(baked.exitCode, 0) << baked.err;
   EXPECT_NE(baked.out.find("baked"), std::string::npos) << baked.out;
-  BakeRun ref = runCli(dir, view + "--reference --spp 256 -o '" + dir + "/reference.png'");
+  CliRun ref = runCli(dir, view + "--reference --spp 256 -o '" + dir + "/reference.png'");
   ASSERT_EQ(ref.exitCode, 0) << ref.err;
   EXPECT_NE(ref.out.find("reference"), std::string::npos) << ref.out;
   EXPECT_NE(ref.out.find("256 paths per pixel"), std::string::npos) << ref.out;
@@ -352,14 +326,14 @@ TEST(CliRender, ReferenceUsesTheBakeReport) {
   EXPECT_GT(sky, dark * 2.0) << "dark " << dark << ", sky " << sky;
 
   writeSettings({{"skyImage", dir + "/missing_sky.exr"}});
-  BakeRun missing = runCli(dir, view + "-o '" + dir + "/missing.png'");
+  CliRun missing = runCli(dir, view + "-o '" + dir + "/missing.png'");
   EXPECT_EQ(missing.exitCode, 1);
   EXPECT_NE(missing.err.find("missing_sky.exr"), std::string::npos) << missing.err;
   EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << missing.err;
   EXPECT_FALSE(fs::exists(dir + "/missing.png"));
 
   fs::remove(copy + "/report.json");
-  BakeRun noReport = runCli(dir, view + "-o '" + dir + "/noreport.png'");
+  CliRun noReport = runCli(dir, view + "-o '" + dir + "/noreport.png'");
   EXPECT_EQ(noReport.exitCode, 0) << noReport.err;
   EXPECT_NE(noReport.out.find("no report.json"), std::string::npos) << noReport.out;
   EXPECT_TRUE(fs::exists(dir + "/noreport.png"));
@@ -368,7 +342,7 @@ TEST(CliRender, ReferenceUsesTheBakeReport) {
 // A scene without lightmaps (not baked) would give a reference black but for emission.
 TEST(CliRender, ReferenceNeedsABakedScene) {
   const std::string dir = tempDir("cli_render_reference_unbaked");
-  BakeRun r = runCli(dir, "render builtin:cornell --reference -o '" + dir + "/view.png'");
+  CliRun r = runCli(dir, "render builtin:cornell --reference -o '" + dir + "/view.png'");
   EXPECT_EQ(r.exitCode, 1);
   EXPECT_NE(r.err.find("afterglow bake"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir + "/view.png"));

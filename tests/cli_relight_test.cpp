@@ -22,30 +22,6 @@ using nlohmann::json;
 namespace afterglow::test {
 namespace {
 
-struct CliRun {
-  int exitCode = -1;
-  std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-CliRun runCli(const std::string& dir, const std::string& args) {
-  const std::string out = dir + "/.stdout", err = dir + "/.stderr";
-  const std::string command =
-      std::string("'") + AFTERGLOW_CLI + "' " + args + " >'" + out + "' 2>'" + err + "'";
-  const int status = std::system(command.c_str());
-  CliRun r;
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
-}
-
 std::vector<float> readExr(const std::string& path) {
   std::vector<float> pixels;
   auto in = OIIO::ImageInput::open(path);

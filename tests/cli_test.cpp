@@ -24,33 +24,6 @@ namespace fs = std::filesystem;
 namespace afterglow::test {
 namespace {
 
-struct CliRun {
-  int exitCode = -1;
-  std::string out, err;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// Runs `afterglow <args>` through the shell, capturing stdout and stderr into files of `dir`.
-CliRun runCli(const std::string& dir, const std::string& args) {
-  const std::string out = dir + "/.stdout", err = dir + "/.stderr";
-  const std::string command =
-      std::string("'") + AFTERGLOW_CLI + "' " + args + " >'" + out + "' 2>'" + err + "'";
-  int status = std::system(command.c_str());
-  CliRun r;
-  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  fs::remove(out);
-  fs::remove(err);
-  return r;
-}
-
 // Files in dir other than the captured output; the CLI must leave nothing else on failure.
 std::vector<std::string> filesIn(const std::string& dir) {
   std::vector<std::string> names;

@@ -9,6 +9,16 @@ namespace afterglow::test {
 std::string sharedScene(const std::string& relative);
 // A fresh empty folder under the build tree for one test's files.
 std::string tempDir(const std::string& name);
+// A whole file's bytes ("" when it cannot be read).
+std::string slurp(const std::string& path);
+
+// The built `afterglow` binary run as a user would, through the shell.
+struct CliRun {
+  int exitCode = -1;
+  std::string out, err;
+};
+// Runs `afterglow <args>`, capturing stdout and stderr through files in `dir`.
+CliRun runCli(const std::string& dir, const std::string& args);
 
 }  // namespace afterglow::test
 

@@ -93,24 +93,6 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"reference", 0, false}, {"spp"},
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
 
-bool parseVec3(const std::string& text, glm::vec3* out) {
-  float v[3];
-  const char* p = text.c_str();
-  for (int i = 0; i < 3; ++i) {
-    char* end = nullptr;
-    v[i] = std::strtof(p, &end);
-    if (end == p || !std::isfinite(v[i])) return false;
-    p = end;
-    if (i < 2) {
-      if (*p != ',') return false;
-      ++p;
-    }
-  }
-  if (*p != '\0') return false;
-  *out = glm::vec3(v[0], v[1], v[2]);
-  return true;
-}
-
 // The settings file as `--name=value` arguments, placed before the command line's own so that
 // the command line wins.
 bool settingsArguments(const std::string& path, std::vector<std::string>* out,

@@ -59,21 +59,6 @@ const std::vector<OptionSpec> kRelightOptions = {
     {"indirect-intensity"},       {"bounces"},            {"quiet", 0, false},
     {"help", 'h', false}};
 
-// "a,b,c[,d]" into `count` floats (want 3, or 3 or 4 when allowFour).
-bool parseFloats(const std::string& text, std::vector<float>& out) {
-  out.clear();
-  const char* p = text.c_str();
-  while (true) {
-    char* end = nullptr;
-    const float v = std::strtof(p, &end);
-    if (end == p || !std::isfinite(v)) return false;
-    out.push_back(v);
-    if (*end == '\0') return true;
-    if (*end != ',') return false;
-    p = end + 1;
-  }
-}
-
 // "NAME=VALUE" split at the last '=' (names may contain '=' but values do not).
 bool splitAssignment(const std::string& text, std::string& name, std::string& value) {
   const size_t eq = text.rfind('=');
@@ -83,17 +68,11 @@ bool splitAssignment(const std::string& text, std::string& name, std::string& va
   return true;
 }
 
-std::string lightNames(const runtime::Runtime& rt) {
+// "'a', 'b'" from count names, or "none".
+template <class Name>
+std::string nameList(int count, Name name) {
   std::string names;
-  for (int i = 0; i < rt.lightCount(); ++i)
-    names += (i ? ", '" : "'") + rt.lightName(i) + "'";
-  return names.empty() ? "none" : names;
-}
-
-std::string materialNames(const runtime::Runtime& rt) {
-  std::string names;
-  for (int i = 0; i < rt.materialCount(); ++i)
-    names += (i ? ", '" : "'") + rt.materialName(i) + "'";
+  for (int i = 0; i < count; ++i) names += (i ? ", '" : "'") + name(i) + "'";
   return names.empty() ? "none" : names;
 }
 
@@ -184,7 +163,7 @@ int runRelight(int argc, char** argv, int first) {
     *light = resolve(name, rt->lightCount(), &runtime::Runtime::findLight, *rt);
     if (*light < 0) {
       error = "--" + option + ": no light '" + name + "' in " + transportPath + " (lights: " +
-              lightNames(*rt) + ")";
+              nameList(rt->lightCount(), [&](int i) { return rt->lightName(i); }) + ")";
       return false;
     }
     return true;
@@ -193,7 +172,7 @@ int runRelight(int argc, char** argv, int first) {
     *material = resolve(name, rt->materialCount(), &runtime::Runtime::findMaterial, *rt);
     if (*material < 0) {
       error = "--" + option + ": no material '" + name + "' in " + transportPath +
-              " (materials: " + materialNames(*rt) + ")";
+              " (materials: " + nameList(rt->materialCount(), [&](int i) { return rt->materialName(i); }) + ")";
       return false;
     }
     return true;

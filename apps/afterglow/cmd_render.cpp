@@ -47,24 +47,6 @@ const char kRenderHelp[] =
 
 namespace {
 
-bool parsePoint(const std::string& text, glm::vec3* out) {
-  float v[3];
-  const char* p = text.c_str();
-  for (int i = 0; i < 3; ++i) {
-    char* end = nullptr;
-    v[i] = std::strtof(p, &end);
-    if (end == p || !std::isfinite(v[i])) return false;
-    p = end;
-    if (i < 2) {
-      if (*p != ',') return false;
-      ++p;
-    }
-  }
-  if (*p != '\0') return false;
-  *out = glm::vec3(v[0], v[1], v[2]);
-  return true;
-}
-
 // Whether any instance has a lightmap layout: the reference path-traces only what a bake lit,
 // so without one its picture would be black but for emission.
 bool hasLightmapLayout(const scenes::Scene& scene) {
@@ -160,9 +142,9 @@ int runRender(int argc, char** argv, int first) {
     if (args.has("camera")) return usage("give --camera or --look-from/--look-at, not both");
     if (!args.has("look-from") || !args.has("look-at"))
       return usage("--look-from and --look-at go together");
-    if (!parsePoint(args.get("look-from"), &from))
+    if (!parseVec3(args.get("look-from"), &from))
       return usage("--look-from wants X,Y,Z, got '" + args.get("look-from") + "'");
-    if (!parsePoint(args.get("look-at"), &at))
+    if (!parseVec3(args.get("look-at"), &at))
       return usage("--look-at wants X,Y,Z, got '" + args.get("look-at") + "'");
   }
   setThreadCount(threads);

@@ -1,12 +1,35 @@
 #include "common.h"
 
+#include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
 
 namespace afterglow::cli {
+
+bool parseFloats(const std::string& text, std::vector<float>& out) {
+  out.clear();
+  const char* p = text.c_str();
+  while (true) {
+    char* end = nullptr;
+    const float v = std::strtof(p, &end);
+    if (end == p || !std::isfinite(v)) return false;
+    out.push_back(v);
+    if (*end == '\0') return true;
+    if (*end != ',') return false;
+    p = end + 1;
+  }
+}
+
+bool parseVec3(const std::string& text, glm::vec3* out) {
+  std::vector<float> v;
+  if (!parseFloats(text, v) || v.size() != 3) return false;
+  *out = glm::vec3(v[0], v[1], v[2]);
+  return true;
+}
 
 void printError(const std::string& message) {
   std::fprintf(stderr, "afterglow: %s\n", message.c_str());

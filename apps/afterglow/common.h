@@ -2,12 +2,20 @@
 #pragma once
 
 #include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
 
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
 #include "afterglow/scenes/scene.h"
 
 namespace afterglow::cli {
+
+// "a,b,c,...": comma-separated finite floats, nothing else. False when malformed.
+bool parseFloats(const std::string& text, std::vector<float>& out);
+// Exactly three of them ("r,g,b", "x,y,z").
+bool parseVec3(const std::string& text, glm::vec3* out);
 
 // Prints "afterglow: <message>" to stderr.
 void printError(const std::string& message);

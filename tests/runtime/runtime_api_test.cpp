@@ -19,6 +19,7 @@
 #include "afterglow/runtime/solver.h"
 #include "afterglow/runtime/transport_file.h"
 #include "afterglow_runtime.h"
+#include "test_rng.h"
 
 // Counts heap allocations on threads that ask for it, to prove update() allocates nothing.
 // Not under sanitizers, whose own operator new must stay.
@@ -61,15 +62,7 @@ extern "C" int afterglow_test_c_load_fails(const char* path, char* err, size_t e
 namespace afterglow::runtime {
 namespace {
 
-struct Rng {
-  uint64_t state;
-  uint32_t next() {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return uint32_t(state >> 33);
-  }
-  uint32_t below(uint32_t n) { return n ? next() % n : 0; }
-  float unit() { return float(next() >> 8) / float(1u << 23); }
-};
+using test::Rng;
 
 // A valid transport whose bounces converge: every links row sees at most 80% of its hemisphere,
 // albedos stay below 1, gathers and filters are averages. Lights "key", "fill", "rim"; materials

@@ -13,22 +13,14 @@
 #include <vector>
 
 #include "afterglow/runtime/transport_file.h"
+#include "test_rng.h"
 
 namespace afterglow::runtime {
 namespace {
 
 // ---- Synthetic transports --------------------------------------------------------------------
 
-// A small deterministic generator (the same numbers on every standard library).
-struct Rng {
-  uint64_t state;
-  uint32_t next() {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return uint32_t(state >> 33);
-  }
-  uint32_t below(uint32_t n) { return n ? next() % n : 0; }
-  float unit() { return float(next() >> 8) / float(1u << 23); }
-};
+using test::Rng;
 
 struct Shape {
   uint32_t texels = 300, clusters = 40, points = 90, backRows = 5;
