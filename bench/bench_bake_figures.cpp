@@ -137,7 +137,9 @@ void printErrors(const char* name, const baker::ReferenceComparison& c) {
   line("", c.indirect);
 }
 
-int cornell(int threads) {
+// quick: only the bake's time and the throughput comparison (no reference, no path-traced
+// bake), for iterating on the precompute's speed.
+int cornell(int threads, bool quick) {
   const std::string path =
       std::string(AFTERGLOW_SHARED_DIR) + "/scenes/cornell_box_mcguire/CornellBox-Original.gltf";
   Result<scenes::Scene> loaded = loadBenchScene(path);
@@ -175,6 +177,10 @@ int cornell(int threads) {
               threads, mark(best <= 0.5));
   printStages(b);
   std::printf("\n");
+  if (quick) {
+    compareThroughput(scene, b, bestPrecompute);
+    return 0;
+  }
 
   // The reference at a high sample count over every 32nd valid texel.
   Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
@@ -257,20 +263,22 @@ int sponza(int threads) {
 
 int benchBake(int argc, char** argv) {
   int threads = 2;
-  bool withSponza = true, withCornell = true;
+  bool withSponza = true, withCornell = true, quick = false;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--threads" && i + 1 < argc) threads = std::atoi(argv[++i]);
     else if (arg == "--cornell-only") withSponza = false;
     else if (arg == "--sponza-only") withCornell = false;
-    else return fail("bake: unknown option " + arg + " (--threads N, --cornell-only, --sponza-only)");
+    else if (arg == "--quick") quick = true;
+    else return fail("bake: unknown option " + arg +
+                     " (--threads N, --cornell-only, --sponza-only, --quick)");
   }
   setThreadCount(threads);
   // Sponza first: its peak memory is the process's, and the Cornell box adds nothing to it.
   if (withSponza)
     if (int rc = sponza(threads)) return rc;
   if (withCornell)
-    if (int rc = cornell(threads)) return rc;
+    if (int rc = cornell(threads, quick)) return rc;
   return 0;
 }
 

@@ -1,7 +1,7 @@
 // afterglow_bench: prints the figures the issues ask for (not a test; nothing here fails a
 // build). One subcommand per capability:
 //   afterglow_bench uv [SCENE] [--texels-per-unit 16] [--threads 2]
-//   afterglow_bench bake [--threads 2] [--cornell-only | --sponza-only]
+//   afterglow_bench bake [--threads 2] [--cornell-only | --sponza-only] [--quick]
 //   afterglow_bench runtime [--cornell-only | --sponza-only] [--repeat N]
 //   afterglow_bench accuracy [SCENE] [--texels-per-unit N] [--spp N] [--stride N] ...
 #include <cstdio>

@@ -28,25 +28,6 @@ namespace fs = std::filesystem;
 namespace afterglow::bench {
 namespace {
 
-template <class T>
-double bytesOf(const std::vector<T>& v) { return double(v.size() * sizeof(T)); }
-
-// What the loaded transport holds in memory (the solver's and the outputs' buffers come on top:
-// a few floats a texel and a cluster).
-double transportBytes(const runtime::TransportData& t) {
-  double b = bytesOf(t.links.rowStart) + bytesOf(t.links.target) + bytesOf(t.links.weight) +
-             bytesOf(t.links.rowScale) + bytesOf(t.texelSky) + bytesOf(t.clusterSky) +
-             bytesOf(t.clusterMaterial) + bytesOf(t.clusterAlbedoTexture) +
-             bytesOf(t.clusterEmissionTexture);
-  for (const runtime::SparseMatrix* m : {&t.clusterGather, &t.pointFilter, &t.texelGather})
-    b += bytesOf(m->rowStart) + bytesOf(m->column) + bytesOf(m->weight);
-  for (const runtime::Source& s : t.sources) b += bytesOf(s.texelTransfer) + bytesOf(s.clusterTransfer);
-  for (const runtime::AtlasLayout& a : t.atlases)
-    b += bytesOf(a.texelOfPixel) + bytesOf(a.mixPixel) + bytesOf(a.mixStart) +
-         bytesOf(a.mixTexel) + bytesOf(a.mixWeight);
-  return b;
-}
-
 // The best of `repeat` timings of f(), milliseconds (the least disturbed by the machine).
 template <class F>
 double bestMs(int repeat, F&& f) {
@@ -90,7 +71,7 @@ int measure(const char* label, scenes::Scene scene, float texelsPerUnit, int atl
   std::unique_ptr<runtime::Runtime> rt = runtime::Runtime::load(path, &error);
   const double loadMs = secondsSince(t0) * 1e3;
   if (!rt) return fail(error);
-  const double heldBytes = transportBytes(rt->data());
+  const double heldBytes = double(rt->data().memoryBytes());
   fs::remove(path, ec);
 
   // One bounce alone, through a Solver on the runtime's data (what update() runs per pass).

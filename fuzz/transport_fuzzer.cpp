@@ -48,11 +48,16 @@ double walk(const std::vector<uint32_t>& rowStart, const std::vector<uint32_t>& 
 void touch(const TransportData& t) {
   const size_t rows = t.links.rows();
   if (rows < t.gatherPointCount || t.links.rowScale.size() != rows) fail("links rows");
-  std::vector<float> seen(t.clusterCount, 0.0f);
-  walk(t.links.rowStart, t.links.target, t.links.weight, t.clusterCount, "links");
+  std::vector<float> seen(t.linkTargetCount(), 0.0f);
+  walk(t.farClusters.rowStart, t.farClusters.column, t.farClusters.weight, t.clusterCount,
+       "far clusters");
+  if (t.links.rowStart.size() != rows + 1 || t.links.rowStart.back() != t.links.size())
+    fail("links offsets");
   for (size_t r = 0; r < rows; ++r)
-    for (uint32_t k = t.links.rowStart[r]; k < t.links.rowStart[r + 1]; ++k)
-      seen[t.links.target[k]] += t.links.weightAt(r, k);
+    for (uint32_t k = t.links.rowStart[r]; k < t.links.rowStart[r + 1]; ++k) {
+      if (t.links.targetAt(k) >= t.linkTargetCount()) fail("links");
+      seen[t.links.targetAt(k)] += t.links.weightAt(r, k);
+    }
   walk(t.clusterGather.rowStart, t.clusterGather.column, t.clusterGather.weight, rows,
        "cluster gather");
   if (t.clusterGather.rows() != t.clusterCount) fail("cluster gather rows");
@@ -118,7 +123,7 @@ bool parse(const uint8_t* data, size_t size, TransportData& t) {
   const bool ok = parseTransport(data, size, t, &error, options);
   if (!ok) {
     if (error.empty() || error.find('\n') != std::string::npos) fail("error is not one line");
-    if (t.texelCount != 0 || !t.atlases.empty() || !t.sources.empty() || !t.links.target.empty())
+    if (t.texelCount != 0 || !t.atlases.empty() || !t.sources.empty() || !t.links.link.empty())
       fail("a failed parse left data behind");
   }
   return ok;

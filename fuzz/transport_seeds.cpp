@@ -52,27 +52,28 @@ TransportData small(bool withSky, bool withFilter) {
   d.clusterMaterial = {0, 0, 1};
   d.clusterAlbedoTexture.assign(3, glm::vec3(1.0f));
   d.clusterEmissionTexture.assign(3, glm::vec3(0.5f));
-  const uint32_t targets[] = {0, 1, 2};
-  const float weights[] = {0.2f, 0.3f, 0.1f};
-  d.links.appendRow(targets, weights, 3);
+  const uint32_t targets[] = {0, 1, 2, 3};  // 3: the far cluster over clusters 0 and 1
+  const float weights[] = {0.2f, 0.3f, 0.1f, 0.1f};
+  const float half[] = {0.5f, 0.5f};
+  d.farClusters.appendRow(targets, half, 2);
+  d.links.appendRow(targets, weights, 4);
   d.links.appendRow(targets + 1, weights + 1, 2);
   d.links.appendRow(targets, weights, 1);  // a back-side cluster's row
   const uint32_t rowsOf[] = {0, 1, 2};
-  const float half[] = {0.5f, 0.5f};
   const float one[] = {1.0f};
   d.clusterGather.appendRow(rowsOf, half, 2);
   d.clusterGather.appendRow(rowsOf + 1, one, 1);
   d.clusterGather.appendRow(rowsOf + 2, one, 1);
-  if (withFilter) {
-    d.pointFilter.appendRow(rowsOf, half, 2);
-    d.pointFilter.appendRow(rowsOf, half, 2);
-    d.filterPasses = 2;
+  d.filterPasses = withFilter ? 2 : 0;
+  for (uint32_t t = 0; t < d.texelCount; ++t) {
+    d.texelPoint.push_back(t % 2);
+    d.texelNeighbours.push_back(0xff);
   }
-  for (uint32_t t = 0; t < d.texelCount; ++t) d.texelGather.appendRow(rowsOf + t % 2, one, 1);
+  buildGatherMaps(d);
   if (withSky) {
     for (uint32_t i = 0; i < d.texelCount * kShCount; ++i)
       d.texelSky.push_back(floatToHalf(0.1f * float(i % 7)));
-    d.clusterSky.assign(d.clusterCount * kShCount, 0.25f);
+    d.clusterSky.assign(d.clusterCount * kShCount, floatToHalf(0.25f));
     d.skySh[0] = glm::vec3(1.0f, 1.5f, 2.0f);
   }
   d.indirectIntensity = 1.5f;

@@ -59,6 +59,8 @@ const char kBakeHelp[] =
     "  --sky-image FILE         equirectangular HDR sky (overrides --sky)\n"
     "  --cluster-size M         largest cluster edge in metres (default 0.5)\n"
     "  --cluster-texels N       largest cluster edge in texels (default 4; 0: no limit)\n"
+    "  --far-distance X         rays hitting a far cluster (4x a cluster's size) from beyond X\n"
+    "                           of its radii link to it, not their cluster (default 2; 0: off)\n"
     "  --dilation N             texels each chart is grown into its padding (default 2)\n"
     "  --reference              compute every texel with the reference path tracer instead\n"
     "                           (slow; for validating bakes: same outputs, no clusters)\n"
@@ -88,7 +90,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"light-samples"},     {"emissive-samples"}, {"bounces"},
     {"indirect-intensity"}, {"albedo-boost"},    {"sky"},
     {"sky-image"},         {"cluster-size"},    {"cluster-texels"},
-    {"dilation"},
+    {"far-distance"},      {"dilation"},
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
@@ -237,6 +239,8 @@ int runBake(int argc, char** argv, int first) {
                      &options.clusters.clusterSize) ||
       !args.getFloat("cluster-texels", options.clusters.clusterTexels, 0.0f, 1e6f,
                      &options.clusters.clusterTexels) ||
+      !args.getFloat("far-distance", options.links.farDistance, 0.0f, 1e6f,
+                     &options.links.farDistance) ||
       !args.getInt("dilation", 2, 0, 64, &options.dilation) ||
       !args.getInt("threads", 0, 0, 1024, &threads) ||
       !args.getInt("spp", 1024, 1, 1 << 24, &options.referenceOptions.samples) ||

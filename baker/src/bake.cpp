@@ -63,6 +63,11 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   progress.begin("clusters", 1);
   result.clusters =
       computeClusters(scene, &tracer, result.texels, &gather.value(), options.clusters);
+  std::vector<Clusters> far;
+  if (options.clusters.farScale > 1.0f && options.links.farDistance > 0.0f)
+    for (int level = 1; level <= options.clusters.farLevels; ++level)
+      far.push_back(computeClusters(scene, &tracer, result.texels, &gather.value(),
+                                    farClusterOptions(options.clusters, level)));
   progress.advance();
   progress.end();
   record("clusters", t0);
@@ -70,7 +75,7 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
 
   t0 = Clock::now();
   Status st = computeLinks(scene, tracer, result.texels, gather.value(), result.clusters,
-                           options.links, tr, progress);
+                           options.links, tr, progress, far);
   if (cancelled()) return Status::error("cancelled");
   if (!st) return st;
   record("links", t0);

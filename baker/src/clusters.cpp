@@ -263,6 +263,16 @@ class GroupClusterer {
 
 }  // namespace
 
+ClusterOptions farClusterOptions(const ClusterOptions& options, int level) {
+  const float scale = std::pow(options.farScale, float(level));
+  ClusterOptions far = options;
+  far.clusterSize *= scale;
+  far.clusterTexels *= scale;
+  far.adaptiveScale *= scale;
+  far.farLevels = 0;
+  return far;
+}
+
 Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
                          const TexelSet& texels, const TexelGather* gather,
                          const ClusterOptions& options) {

@@ -79,25 +79,6 @@ float emissionModulation(const scenes::Scene& scene, const scenes::Material& m, 
   return channels > 0 ? sum / float(channels) : 0.0f;
 }
 
-EmitterSample sampleEmitter(const Emitter& e, glm::vec2 u) {
-  const float pick = std::min(u.x, 0.99999994f) * e.totalArea;
-  size_t k = size_t(std::upper_bound(e.cdf.begin(), e.cdf.end(), pick) - e.cdf.begin());
-  k = std::min(k, e.triangles.size() - 1);
-  const EmitterTriangle& tri = e.triangles[k];
-  const float lo = k > 0 ? e.cdf[k - 1] : 0.0f;
-  // What is left of u.x inside the chosen triangle's slice, back in [0, 1).
-  const float ux = std::clamp((pick - lo) / tri.area, 0.0f, 0.99999994f);
-  // Square to triangle (area preserving): b1 = 1 − √ux, b2 = u.y·√ux.
-  const float s = std::sqrt(ux);
-  const float b1 = 1.0f - s, b2 = u.y * s;
-  EmitterSample out;
-  out.point = tri.p0 + b1 * tri.e1 + b2 * tri.e2;
-  out.normal = tri.normal;
-  out.uv = (1.0f - b1 - b2) * tri.uv0 + b1 * tri.uv1 + b2 * tri.uv2;
-  out.pdfArea = 1.0f / e.totalArea;
-  return out;
-}
-
 float triangleTransfer(const EmitterTriangle& tri, bool doubleSided, glm::vec3 p, glm::vec3 n) {
   const glm::vec3 v0 = tri.p0 - p;
   const float side = glm::dot(tri.normal, -v0);  // > 0: p is in front of the emitter

@@ -4,6 +4,8 @@
 // Shared by the precompute (direct.cpp) and the reference path tracer.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -48,7 +50,25 @@ struct EmitterSample {
   glm::vec2 uv;       // emissive texture UV at the point
   float pdfArea = 0;  // 1 / totalArea
 };
-EmitterSample sampleEmitter(const Emitter& e, glm::vec2 u);
+// Inline: direct light draws one for every shadow ray.
+inline EmitterSample sampleEmitter(const Emitter& e, glm::vec2 u) {
+  const float pick = std::min(u.x, 0.99999994f) * e.totalArea;
+  size_t k = size_t(std::upper_bound(e.cdf.begin(), e.cdf.end(), pick) - e.cdf.begin());
+  k = std::min(k, e.triangles.size() - 1);
+  const EmitterTriangle& tri = e.triangles[k];
+  const float lo = k > 0 ? e.cdf[k - 1] : 0.0f;
+  // What is left of u.x inside the chosen triangle's slice, back in [0, 1).
+  const float ux = std::clamp((pick - lo) / tri.area, 0.0f, 0.99999994f);
+  // Square to triangle (area preserving): b1 = 1 − √ux, b2 = u.y·√ux.
+  const float s = std::sqrt(ux);
+  const float b1 = 1.0f - s, b2 = u.y * s;
+  EmitterSample out;
+  out.point = tri.p0 + b1 * tri.e1 + b2 * tri.e2;
+  out.normal = tri.normal;
+  out.uv = (1.0f - b1 - b2) * tri.uv0 + b1 * tri.uv1 + b2 * tri.uv2;
+  out.pdfArea = 1.0f / e.totalArea;
+  return out;
+}
 
 // Unoccluded E/π at point p with unit normal n from a uniform emitter of unit radiance covering
 // the triangle: (1/2π) Σ_edges θ_i (n · γ_i) over the triangle clipped to the hemisphere above

@@ -162,6 +162,9 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   };
   progress.begin("gather rays", count);
   constexpr size_t kRaysPerBatch = 1024;
+  // Small blocks of texels: the work per texel varies tenfold (near texels cast many more
+  // rays, and they sit together), and a few big blocks would leave a thread idle at the end.
+  constexpr size_t kTexelsPerBlock = 512;
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     GatherBatch batch;
     std::vector<uint32_t> batchTexels, batchFirst;
@@ -175,13 +178,14 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         batchFirst.push_back(uint32_t(batch.size()));
         const uint32_t n = firstCount[t];
         const sampling::InterleavedGrid grid(n);
+        sampling::InterleavedGrid::Walk walk(grid);
         const sampling::Frame frame(texels.normal[t]);
         sampling::Rng rng(sampling::Stream::TexelLinks, t, 0);  // one sequence per texel
         const bool quarter = quartered(uint32_t(t));
         for (uint32_t s = 0; s < n; ++s)
           batch.add(texels.position[t], frame, texels.geometricNormal[t],
-                    quarter ? grid.point(rng, s, texels.pixel[t].x, texels.pixel[t].y)
-                            : grid.point(rng, s));
+                    quarter ? walk.next(rng, texels.pixel[t].x, texels.pixel[t].y)
+                            : walk.next(rng));
       }
       if (batchTexels.empty()) break;
       batch.trace(tracer, texels, &lookup);
@@ -202,7 +206,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
       }
     }
     progress.advance(end - begin);
-  }, 4096);
+  }, kTexelsPerBlock);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
 
@@ -272,10 +276,11 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         const sampling::Frame frame(texels.normal[t]);
         auto cast = [&](uint32_t n, uint64_t seed, const glm::u16vec2* quarter) {
           const sampling::InterleavedGrid grid(std::max(1u, n));
+          sampling::InterleavedGrid::Walk walk(grid);
           sampling::Rng rng(sampling::Stream::TexelLinks, t, seed);
           for (uint32_t s = 0; s < n; ++s)
             batch.add(texels.position[t], frame, texels.geometricNormal[t],
-                      quarter ? grid.point(rng, s, quarter->x, quarter->y) : grid.point(rng, s));
+                      quarter ? walk.next(rng, quarter->x, quarter->y) : walk.next(rng));
         };
         // Stratified sets in the order the hits are kept: the top-up (a full set), the
         // adopted quarters (full sets of the block), then the near set.
@@ -296,7 +301,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
       }
     }
     progress.advance(end - begin);
-  }, 4096);
+  }, kTexelsPerBlock);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
   // Which hits of a near texel lie beyond its near field (nearField texel edges): measured to
@@ -408,23 +413,35 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   const uint32_t backRays = std::max(4u, rays / 8);
   progress.begin("gather rays (backs)", count);
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
+    // Several texels' back rays per trace, as in the passes above.
     GatherBatch back;
-    for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
-      if (!g.backSeen[t] || !texels.valid[t]) continue;
+    std::vector<uint32_t> batchTexels;
+    const sampling::Stratified strata(backRays);
+    for (size_t t = begin; t < end && !progress.cancelled();) {
       back.clear();
-      const sampling::Frame frame(-texels.normal[t]);
-      for (uint32_t s = 0; s < backRays; ++s) {
-        sampling::Rng rng(sampling::Stream::BackDistance, t, s);
-        back.add(texels.backPosition(uint32_t(t)), frame, -texels.geometricNormal[t],
-                 sampling::stratified2(rng, s, backRays));
+      batchTexels.clear();
+      for (; t < end && back.size() < kRaysPerBatch; ++t) {
+        if (!g.backSeen[t] || !texels.valid[t]) continue;
+        batchTexels.push_back(uint32_t(t));
+        const sampling::Frame frame(-texels.normal[t]);
+        const sampling::Rng::ItemSeed seed{
+            sampling::Rng::itemSeed(sampling::Stream::BackDistance, t)};
+        for (uint32_t s = 0; s < backRays; ++s) {
+          sampling::Rng rng(seed, s);
+          back.add(texels.backPosition(uint32_t(t)), frame, -texels.geometricNormal[t],
+                   strata.point(rng, s));
+        }
       }
+      if (batchTexels.empty()) break;
       back.trace(tracer, texels, nullptr);
-      const GatherBatch::Summary seen = back.summarize(tracer, 0, backRays);
-      if (seen.inverseDistance > 0.0)
-        g.backHarmonicDistance[t] = float(double(backRays) / seen.inverseDistance);
+      for (size_t i = 0; i < batchTexels.size(); ++i) {
+        const GatherBatch::Summary seen = back.summarize(tracer, i * backRays, (i + 1) * backRays);
+        if (seen.inverseDistance > 0.0)
+          g.backHarmonicDistance[batchTexels[i]] = float(double(backRays) / seen.inverseDistance);
+      }
     }
     progress.advance(end - begin);
-  }, 4096);
+  }, kTexelsPerBlock);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
   return g;

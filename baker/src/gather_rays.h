@@ -4,6 +4,8 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -85,45 +87,61 @@ class TexelLookup {
 // texel's sample, as for a floor texel half under a box: a ray from inside the box that lands
 // on the hidden half must not collect the light of the sample outside. Then the nearest texel
 // of the same chart that the hit point does see stands in; with none, the ray is absorbed.
-inline uint32_t texelOfHit(const RayTracer& tracer, const TexelSet& texels, uint32_t entry,
-                           const Hit& hit) {
-  if (entry == runtime::kNoTexel || !(entry & TexelLookup::kNear)) return entry;
-  const uint32_t t = entry & ~TexelLookup::kNear;
-  const glm::vec3 side = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
-  const glm::vec3 from = tracer.position(hit) + side * texels.offset[t];
-  auto sees = [&](uint32_t candidate) {
-    const glm::vec3 to =
-        hit.frontFace ? texels.position[candidate] : texels.backPosition(candidate);
-    const glm::vec3 d = to - from;
+// Only texels near other geometry (TexelLookup::kNear) are checked. In two steps, so that a
+// batch's sight lines are traced together: sightLine() gives the line from the hit point to
+// its texel's sample, and standIn() searches the neighbours when that line is blocked.
+struct TexelOfHit {
+  // The line from the hit point (lifted off the surface by texel t's offset) to the sample of
+  // texel `target` on the side the ray arrived at; false when the two coincide (nothing can
+  // stand between them).
+  static bool sightLine(const RayTracer& tracer, const TexelSet& texels, uint32_t t,
+                        const Hit& hit, uint32_t target, Ray& ray) {
+    const glm::vec3 d = (hit.frontFace ? texels.position[target] : texels.backPosition(target)) -
+                        from(tracer, texels, t, hit);
     const float length = glm::length(d);
-    if (!(length > 0.0f)) return true;
-    Ray ray;
-    ray.origin = from;
+    if (!(length > 0.0f)) return false;
+    ray.origin = from(tracer, texels, t, hit);
     ray.direction = d / length;
     ray.tfar = length;
-    return !tracer.occluded(ray);
-  };
-  if (sees(t)) return t;
-  const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
-  const int x = texels.pixel[t].x, y = texels.pixel[t].y;
-  uint32_t best = runtime::kNoTexel;
-  float bestDistance = std::numeric_limits<float>::infinity();
-  for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx) {
-      const int nx = x + dx, ny = y + dy;
-      if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height)
-        continue;
-      const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
-      if (n == runtime::kNoTexel || !texels.valid[n] || texels.instance[n] != texels.instance[t])
-        continue;
-      const float distance = glm::length(texels.position[n] - from);
-      if (distance < bestDistance && sees(n)) {
-        bestDistance = distance;
-        best = n;
+    return true;
+  }
+
+  // The nearest valid neighbour of t in its chart that the hit point sees, or kNoTexel.
+  static uint32_t standIn(const RayTracer& tracer, const TexelSet& texels, uint32_t t,
+                          const Hit& hit) {
+    const glm::vec3 origin = from(tracer, texels, t, hit);
+    auto sees = [&](uint32_t candidate) {
+      Ray ray;
+      return !sightLine(tracer, texels, t, hit, candidate, ray) || !tracer.occluded(ray);
+    };
+    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+    const int x = texels.pixel[t].x, y = texels.pixel[t].y;
+    uint32_t best = runtime::kNoTexel;
+    float bestDistance = std::numeric_limits<float>::infinity();
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = x + dx, ny = y + dy;
+        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height)
+          continue;
+        const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
+        if (n == runtime::kNoTexel || !texels.valid[n] || texels.instance[n] != texels.instance[t])
+          continue;
+        const float distance = glm::length(texels.position[n] - origin);
+        if (distance < bestDistance && sees(n)) {
+          bestDistance = distance;
+          best = n;
+        }
       }
-    }
-  return best;
-}
+    return best;
+  }
+
+ private:
+  static glm::vec3 from(const RayTracer& tracer, const TexelSet& texels, uint32_t t,
+                        const Hit& hit) {
+    const glm::vec3 side = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
+    return tracer.position(hit) + side * texels.offset[t];
+  }
+};
 
 // Cosine-distributed rays of one or several texels (or a cluster), traced together: the bigger
 // the batch, the longer Embree runs before hit processing touches other memory.
@@ -168,19 +186,49 @@ class GatherBatch {
     // texels: one cache miss's latency for the batch instead of one per hit.
     uvs_.resize(rays_.size());
     slots_.assign(rays_.size(), nullptr);
+    lit_.assign(rays_.size(), 0);
     for (size_t k = first; k < rays_.size(); ++k) {
       const Hit& hit = hits_[k];
       if (!lit(scene, tracer, hit)) continue;
+      lit_[k] = 1;
       uvs_[k] = tracer.uv(hit, 1);
       slots_[k] = lookup->slot(scene, hit.instance, uvs_[k]);
       if (slots_[k]) __builtin_prefetch(slots_[k]);
     }
+    // The texels hit; those near other geometry first have their sight lines traced, all
+    // together (TexelOfHit).
+    sightRays_.clear();
+    sightOf_.clear();
+    auto code = [&](size_t k, uint32_t t) {
+      if (t != runtime::kNoTexel)
+        codes_[k] = hits_[k].frontFace ? t : (t | TexelGather::kBackSide);
+    };
     for (size_t k = first; k < rays_.size(); ++k) {
+      if (!lit_[k]) continue;
       const Hit& hit = hits_[k];
-      if (!lit(scene, tracer, hit)) continue;
-      uint32_t t = lookup->resolve(scene, hit.instance, uvs_[k], slots_[k]);
-      if (t != runtime::kNoTexel) t = texelOfHit(tracer, texels, t, hit);
-      if (t != runtime::kNoTexel) codes_[k] = hit.frontFace ? t : (t | TexelGather::kBackSide);
+      const uint32_t entry = lookup->resolve(scene, hit.instance, uvs_[k], slots_[k]);
+      if (entry == runtime::kNoTexel || !(entry & TexelLookup::kNear)) {
+        code(k, entry);
+        continue;
+      }
+      const uint32_t t = entry & ~TexelLookup::kNear;
+      Ray& sight = sightRays_.emplace_back();
+      if (TexelOfHit::sightLine(tracer, texels, t, hit, t, sight)) {
+        sightOf_.push_back({uint32_t(k), t});
+      } else {
+        sightRays_.pop_back();
+        code(k, t);
+      }
+    }
+    if (sightRays_.empty()) return;
+    if (blockedSize_ < sightRays_.size()) {
+      blockedSize_ = sightRays_.size();
+      blocked_.reset(new bool[blockedSize_]);
+    }
+    tracer.occluded(sightRays_.data(), blocked_.get(), sightRays_.size());
+    for (size_t i = 0; i < sightOf_.size(); ++i) {
+      const auto [k, t] = sightOf_[i];
+      code(k, blocked_[i] ? TexelOfHit::standIn(tracer, texels, t, hits_[k]) : t);
     }
   }
 
@@ -199,17 +247,30 @@ class GatherBatch {
       }
       if (hit.t > 0.0f) out.inverseDistance += 1.0 / double(hit.t);
       if (hit.t < near) ++out.close;
-      if (!hit.frontFace && !tracer.material(hit).doubleSided) ++out.backfaces;
+      if (!hit.frontFace && !(sides(tracer, hit) & kBackReflects)) ++out.backfaces;
     }
     return out;
   }
 
  private:
+  // What a hit's geometry is, per geometry looked up once (a hit's material and instance sit
+  // behind several dependent loads): kStatic, and kBackReflects for double-sided materials.
+  static constexpr uint8_t kStatic = 1, kBackReflects = 2, kUnknown = 0xff;
+  uint8_t sides(const RayTracer& tracer, const Hit& hit) const {
+    if (hit.geometry >= sides_.size()) sides_.resize(size_t(hit.geometry) + 1, kUnknown);
+    uint8_t& s = sides_[hit.geometry];
+    if (s == kUnknown)
+      s = uint8_t((tracer.scene().instances[hit.instance].isStatic ? kStatic : 0) |
+                  (tracer.material(hit).doubleSided ? kBackReflects : 0));
+    return s;
+  }
+
   // A hit on a surface that takes part in bounces: static, and seen from a side that reflects.
-  static bool lit(const scenes::Scene& scene, const RayTracer& tracer, const Hit& hit) {
+  // Dynamic instances block rays and take no part.
+  bool lit(const scenes::Scene& scene, const RayTracer& tracer, const Hit& hit) const {
     if (!hit.valid()) return false;
-    if (!hit.frontFace && !tracer.material(hit).doubleSided) return false;
-    return scene.instances[hit.instance].isStatic;  // dynamic ones block, take no part
+    const uint8_t s = sides(tracer, hit);
+    return (s & kStatic) && (hit.frontFace || (s & kBackReflects));
   }
 
   std::vector<Ray> rays_;
@@ -217,6 +278,12 @@ class GatherBatch {
   std::vector<uint32_t> codes_;
   std::vector<glm::vec2> uvs_;
   std::vector<const uint32_t*> slots_;
+  std::vector<uint8_t> lit_;
+  std::vector<Ray> sightRays_;                    // sight lines of hits on near texels
+  std::vector<std::pair<uint32_t, uint32_t>> sightOf_;  // per sight line: ray, texel
+  std::unique_ptr<bool[]> blocked_;               // per sight line
+  size_t blockedSize_ = 0;
+  mutable std::vector<uint8_t> sides_;  // per tracer geometry, kUnknown until first hit
 };
 
 }  // namespace afterglow::baker

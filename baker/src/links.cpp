@@ -2,6 +2,7 @@
 // cluster, how clusters and texels read the gather points, and sky transfer, from the texels'
 // gather rays (and the back-side clusters' own rays).
 #include <algorithm>
+#include <memory>
 #include <mutex>
 #include <cmath>
 #include <utility>
@@ -46,35 +47,41 @@ void dropWeakLinks(float minWeight, std::vector<Link>& row) {
 
 // Sums a row's weights per target cluster in a dense array (one per block of rows: a row of a
 // big cluster gathers tens of thousands of rays), then emits the targets in ascending order,
-// leaving out links below minWeight.
+// leaving out links below minWeight. The targets touched are kept as bits, one per cluster, and
+// read back in order a 64-bit word at a time, visiting only the words touched (a short list to
+// sort): cheaper than sorting every target (a row touches a few hundred of ten thousand
+// clusters), and independent of how many clusters the level has.
 class RowBuilder {
  public:
-  explicit RowBuilder(uint32_t clusters) : sum_(clusters, 0.0), seen_(clusters, 0) {}
+  explicit RowBuilder(uint32_t clusters)
+      : sum_(clusters, 0.0), touched_((size_t(clusters) + 63) / 64, 0) {}
 
   void add(uint32_t cluster, double weight) {
-    if (!seen_[cluster]) {
-      seen_[cluster] = 1;
-      touched_.push_back(cluster);
-    }
+    uint64_t& word = touched_[cluster >> 6];
+    if (word == 0) words_.push_back(cluster >> 6);
+    word |= uint64_t(1) << (cluster & 63);
     sum_[cluster] += weight;
   }
 
   void finish(float minWeight, std::vector<Link>& row) {
-    std::sort(touched_.begin(), touched_.end());
     row.clear();
-    for (uint32_t c : touched_) {
-      row.push_back({c, float(sum_[c])});
-      sum_[c] = 0.0;
-      seen_[c] = 0;
+    std::sort(words_.begin(), words_.end());
+    for (uint32_t w : words_) {
+      for (uint64_t bits = touched_[w]; bits != 0; bits &= bits - 1) {
+        const uint32_t c = w * 64 + uint32_t(__builtin_ctzll(bits));
+        row.push_back({c, float(sum_[c])});
+        sum_[c] = 0.0;
+      }
+      touched_[w] = 0;
     }
-    touched_.clear();
+    words_.clear();
     dropWeakLinks(minWeight, row);
   }
 
  private:
   std::vector<double> sum_;
-  std::vector<uint8_t> seen_;
-  std::vector<uint32_t> touched_;
+  std::vector<uint64_t> touched_;  // bit c of word c / 64: cluster c was added to
+  std::vector<uint32_t> words_;    // the words of touched_ that are not zero
 };
 
 // Builds a sparse matrix row by row in parallel: fill(row, state, links) writes a row's links
@@ -82,8 +89,8 @@ class RowBuilder {
 // collects its own, and the blocks are joined in row order (so the result does not depend on
 // the thread count, nor the memory on hundreds of thousands of small vectors).
 template <class MakeState, class Fill>
-void buildRows(size_t rows, Progress& progress, MakeState&& makeState, Fill&& fill,
-               runtime::SparseLinks& out, size_t grain) {
+void buildRows(size_t rows, uint32_t targets, Progress& progress, MakeState&& makeState,
+               Fill&& fill, runtime::SparseLinks& out, size_t grain) {
   // A block's rows, already quantised (SparseLinks of its own, joined below).
   struct Block {
     size_t begin = 0;
@@ -94,6 +101,7 @@ void buildRows(size_t rows, Progress& progress, MakeState&& makeState, Fill&& fi
   parallelForBlocks(rows, [&](size_t begin, size_t end, int) {
     Block block;
     block.begin = begin;
+    block.links = runtime::SparseLinks(targets);
     block.links.rowScale.reserve(end - begin);
     auto state = makeState();
     std::vector<Link> row;
@@ -116,17 +124,15 @@ void buildRows(size_t rows, Progress& progress, MakeState&& makeState, Fill&& fi
   }, grain);
   std::sort(blocks.begin(), blocks.end(),
             [](const Block& a, const Block& b) { return a.begin < b.begin; });
-  out = runtime::SparseLinks();
+  out = runtime::SparseLinks(targets);
   size_t total = 0;
   for (const Block& b : blocks) total += b.links.size();
   out.rowStart.reserve(rows + 1);
   out.rowScale.reserve(rows);
-  out.target.reserve(total);
-  out.weight.reserve(total);
+  out.link.reserve(total);
   for (Block& b : blocks) {
-    const uint32_t base = uint32_t(out.target.size());
-    out.target.insert(out.target.end(), b.links.target.begin(), b.links.target.end());
-    out.weight.insert(out.weight.end(), b.links.weight.begin(), b.links.weight.end());
+    const uint32_t base = uint32_t(out.link.size());
+    out.link.insert(out.link.end(), b.links.link.begin(), b.links.link.end());
     out.rowScale.insert(out.rowScale.end(), b.links.rowScale.begin(), b.links.rowScale.end());
     for (size_t r = 1; r < b.links.rowStart.size(); ++r)
       out.rowStart.push_back(base + b.links.rowStart[r]);
@@ -190,51 +196,71 @@ std::vector<uint8_t> markFilterNeighbours(const RayTracer& tracer, const TexelSe
                                           const TexelGather& gather, const LinkOptions& options) {
   std::vector<uint8_t> marks(texels.size(), 0);
   const float minCos = std::cos(30.0f * kPi / 180.0f);
-  auto compatible = [&](uint32_t a, uint32_t b) {
-    if (!texels.valid[b] || texels.instance[a] != texels.instance[b]) return false;
-    if (glm::dot(texels.normal[a], texels.normal[b]) < minCos) return false;
+  // Whether a and b may smooth each other: kNo, kYes, or kInSight when the sight line `sight`
+  // between them is clear.
+  enum Compatible { kNo, kYes, kInSight };
+  auto compatible = [&](uint32_t a, uint32_t b, Ray& sight) {
+    if (!texels.valid[b] || texels.instance[a] != texels.instance[b]) return kNo;
+    if (glm::dot(texels.normal[a], texels.normal[b]) < minCos) return kNo;
     const glm::vec3 d = texels.position[b] - texels.position[a];
     const float distance = glm::length(d);
     if (std::abs(glm::dot(texels.geometricNormal[a], d)) > 0.2f * distance ||
         std::abs(glm::dot(texels.geometricNormal[b], d)) > 0.2f * distance)
-      return false;
+      return kNo;
     const float reach = options.filterReach *
                         std::min(gather.harmonicDistance[a], gather.harmonicDistance[b]);
-    if (!(distance < reach)) return false;
+    if (!(distance < reach)) return kNo;
     const uint32_t from = std::min(a, b), to = std::max(a, b);
     const float lift = 0.25f * distance;
     const glm::vec3 p = texels.position[from] + texels.normal[from] * lift;
     const glm::vec3 q = texels.position[to] + texels.normal[to] * lift;
     const float length = glm::length(q - p);
-    if (!(length > 0.0f)) return true;
-    Ray ray;
-    ray.origin = p;
-    ray.direction = (q - p) / length;
-    ray.tfar = length;
-    return !tracer.occluded(ray);
+    if (!(length > 0.0f)) return kYes;
+    sight.origin = p;
+    sight.direction = (q - p) / length;
+    sight.tfar = length;
+    return kInSight;
   };
-  parallelFor(texels.size(), [&](size_t i) {
-    const uint32_t t = uint32_t(i);
-    if (!texels.valid[t]) return;
-    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
-    uint8_t mask = 0;
-    for (int k = 0; k < 8; ++k) {
-      const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[k][0];
-      const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[k][1];
-      if (x < 0 || y < 0 || x >= layout.width || y >= layout.height) continue;
-      const uint32_t n = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
-      if (n != kNoTexel && compatible(t, n)) mask |= uint8_t(1u << k);
+  // A block's sight lines are traced together (a coherent stream, RayTracer::occluded).
+  parallelForBlocks(texels.size(), [&](size_t begin, size_t end, int) {
+    std::vector<Ray> sights;
+    std::vector<std::pair<uint32_t, uint8_t>> markOf;  // per sight line: texel, its bit
+    sights.reserve((end - begin) * 8);
+    markOf.reserve((end - begin) * 8);
+    for (size_t i = begin; i < end; ++i) {
+      const uint32_t t = uint32_t(i);
+      if (!texels.valid[t]) continue;
+      const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+      for (int k = 0; k < 8; ++k) {
+        const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[k][0];
+        const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[k][1];
+        if (x < 0 || y < 0 || x >= layout.width || y >= layout.height) continue;
+        const uint32_t n = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
+        if (n == kNoTexel) continue;
+        Ray sight;
+        const Compatible c = compatible(t, n, sight);
+        if (c == kYes) marks[t] |= uint8_t(1u << k);
+        if (c != kInSight) continue;
+        sights.push_back(sight);
+        markOf.push_back({t, uint8_t(1u << k)});
+      }
     }
-    marks[t] = mask;
-  });
+    std::unique_ptr<bool[]> blocked(new bool[sights.size()]);
+    tracer.occluded(sights.data(), blocked.get(), sights.size());
+    for (size_t j = 0; j < sights.size(); ++j)
+      if (!blocked[j]) marks[markOf[j].first] |= markOf[j].second;
+  }, 1024);
   return marks;
 }
 
 // Sorts (column, weight) pairs by column, sums duplicates and scales the row to sum to one.
 void appendNormalised(std::vector<std::pair<uint32_t, float>>& entries, runtime::SparseMatrix& m) {
   std::sort(entries.begin(), entries.end());
-  std::vector<uint32_t> columns;
-  std::vector<float> weights;
+  // Reused between calls: the maps have a row per texel, two allocations each added up.
+  thread_local std::vector<uint32_t> columns;
+  thread_local std::vector<float> weights;
+  columns.clear();
+  weights.clear();
   double total = 0.0;
   for (const auto& e : entries) total += double(e.second);
   for (size_t i = 0; i < entries.size();) {
@@ -248,58 +274,55 @@ void appendNormalised(std::vector<std::pair<uint32_t, float>>& entries, runtime:
   m.appendRow(columns.data(), weights.data(), columns.size());
 }
 
-// The tent over a texel's marked neighbours: 4 for itself, 2 along the axes, 1 on diagonals.
-float tentWeight(int k) {
-  return (runtime::kNeighbourOffsets[k][0] == 0 || runtime::kNeighbourOffsets[k][1] == 0) ? 2.0f
-                                                                                          : 1.0f;
-}
+// Far clusters as link targets: per level and texel, its far cluster (front sides only,
+// numbered from 0 across the levels), and per far cluster the squared distance beyond which a
+// hit links it.
+struct FarTargets {
+  std::vector<std::vector<uint32_t>> ofTexel;  // [level][texel]
+  std::vector<float> reach2;
 
-// How texels read gather points and how gather points smooth each other, both from the tent
-// over the marked neighbours: a texel mixes the points of itself and its neighbours; a point
-// takes the mean over its texels of that same mix (the tent applied to the points' values as
-// the texels see them, averaged back over the point).
-void buildGatherMaps(const TexelSet& texels, const TexelGather& gather,
-                     const std::vector<uint8_t>& marks, const LinkOptions& options,
-                     runtime::TransportData& transport) {
-  const uint32_t count = texels.size(), points = gather.points();
-  transport.filterPasses = std::max(0, options.filterPasses);
-  const bool smooth = transport.filterPasses > 0;
-  auto mixOf = [&](uint32_t t, std::vector<std::pair<uint32_t, float>>& out) {
-    out.emplace_back(gather.pointOfTexel[t], 4.0f);
-    if (!smooth) return;
-    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
-    for (int k = 0; k < 8; ++k) {
-      if (!(marks[t] & (1u << k))) continue;
-      const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[k][0];
-      const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[k][1];
-      const uint32_t n = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
-      if (n == kNoTexel || gather.pointOfTexel[n] == TexelGather::kNoHit) continue;
-      out.emplace_back(gather.pointOfTexel[n], tentWeight(k));
+  // The coarsest far cluster of texel t that a point at squared distance d2 sees from far
+  // enough, or kNoTexel.
+  uint32_t of(uint32_t t, float d2) const {
+    for (size_t level = ofTexel.size(); level-- > 0;) {
+      const uint32_t f = ofTexel[level][t];
+      if (f != kNoTexel && d2 > reach2[f]) return f;
     }
-  };
+    return kNoTexel;
+  }
+};
+
+// Numbers the front far clusters level by level, fills transport.farClusters (each the
+// area-weighted mix of the clusters its texels belong to) and the targets. A far cluster's
+// radius is the farthest of its texels' corners from its centre.
+FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
+                      const std::vector<Clusters>& levels, float farDistance,
+                      runtime::TransportData& transport) {
+  FarTargets out;
+  transport.farClusters = runtime::SparseMatrix();
+  if (!(farDistance > 0.0f)) return out;
   std::vector<std::pair<uint32_t, float>> entries;
-  transport.texelGather = runtime::SparseMatrix();
-  transport.texelGather.rowStart.reserve(size_t(count) + 1);
-  for (uint32_t t = 0; t < count; ++t) {
-    entries.clear();
-    if (texels.valid[t] && gather.pointOfTexel[t] != TexelGather::kNoHit) mixOf(t, entries);
-    appendNormalised(entries, transport.texelGather);
-  }
-  transport.pointFilter = runtime::SparseMatrix();
-  if (!smooth) return;
-  transport.pointFilter.rowStart.reserve(size_t(points) + 1);
-  for (uint32_t p = 0; p < points; ++p) {
-    entries.clear();
-    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
-      const size_t before = entries.size();
-      mixOf(gather.pointTexels[k], entries);
-      // Neighbours inside the point are the point itself: only the centre weight counts for
-      // it, so a block smooths with its neighbours as strongly as a texel does with its own.
-      for (size_t i = before + 1; i < entries.size(); ++i)
-        if (entries[i].first == p) entries[i].second = 0.0f;
+  for (const Clusters& far : levels) {
+    std::vector<uint32_t>& ofTexel = out.ofTexel.emplace_back(texels.size(), kNoTexel);
+    for (uint32_t c = 0; c < far.size(); ++c) {
+      if (far.back[c] || far.firstTexel[c] == far.firstTexel[c + 1]) continue;
+      const uint32_t f = uint32_t(out.reach2.size());
+      entries.clear();
+      float radius = 0.0f;
+      for (uint32_t k = far.firstTexel[c]; k < far.firstTexel[c + 1]; ++k) {
+        const uint32_t t = far.memberTexels[k];
+        if (clusters.texelCluster[t] == kNoTexel) continue;  // (every valid texel has one)
+        ofTexel[t] = f;
+        entries.emplace_back(clusters.texelCluster[t], texels.area[t]);
+        radius = std::max(radius, glm::length(texels.position[t] - far.position[c]) +
+                                      0.7072f * texels.edge[t]);
+      }
+      const float reach = farDistance * radius;
+      out.reach2.push_back(reach * reach);
+      appendNormalised(entries, transport.farClusters);
     }
-    appendNormalised(entries, transport.pointFilter);
   }
+  return out;
 }
 
 }  // namespace
@@ -307,7 +330,7 @@ void buildGatherMaps(const TexelSet& texels, const TexelGather& gather,
 Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const TexelSet& texels,
                     const TexelGather& gather, const Clusters& clusters,
                     const LinkOptions& options, runtime::TransportData& transport,
-                    Progress& progress) {
+                    Progress& progress, const std::vector<Clusters>& farLevels) {
   if (options.clusterRays <= 0) return Status::error("computeLinks: clusterRays must be positive");
   const uint32_t texelCount = texels.size();
   const uint32_t clusterCount = clusters.size();
@@ -323,6 +346,10 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   if (clusterCount > 0 && clusters.firstTexel.size() != size_t(clusterCount) + 1)
     return Status::error("computeLinks: Clusters::firstTexel needs one entry per cluster plus one");
 
+  for (const Clusters& far : farLevels)
+    if (far.texelCluster.size() != texelCount)
+      return Status::error("computeLinks: the far clusters do not match the texel set");
+
   transport.texelCount = texelCount;
   transport.clusterCount = clusterCount;
   transport.gatherPointCount = points;
@@ -334,6 +361,23 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     if (code == TexelGather::kNoHit) return kNoTexel;
     const uint32_t t = code & TexelGather::kTexelMask;
     return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
+  };
+  const FarTargets far = farTargets(texels, clusters, farLevels, options.farDistance, transport);
+  const uint32_t targetCount = transport.linkTargetCount();
+  if (targetCount > runtime::kMaxLinkTargets)
+    return Status::error(format(
+        "%u clusters and far clusters, more than the transport's links can address (%u): raise "
+        "--cluster-size or --cluster-texels, or lower --texels-per-unit",
+        targetCount, runtime::kMaxLinkTargets));
+  // What a gather point's ray from texel `from` links to: the coarsest far cluster of a front
+  // hit seen from far enough, else the hit's cluster.
+  auto targetOf = [&](uint32_t code, uint32_t from) -> uint32_t {
+    if (far.reach2.empty() || code == TexelGather::kNoHit || (code & TexelGather::kBackSide))
+      return clusterOf(code);
+    const uint32_t t = code & TexelGather::kTexelMask;
+    const glm::vec3 d = texels.position[t] - texels.position[from];
+    const uint32_t f = far.of(t, glm::dot(d, d));
+    return f != kNoTexel ? clusterCount + f : clusterOf(code);
   };
   std::vector<uint32_t> backClusters;
   for (uint32_t c = 0; c < clusterCount; ++c)
@@ -367,7 +411,7 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
       const uint32_t firstHit = gather.hitStart[t], n = gather.hitStart[t + 1] - firstHit;
       for (uint32_t i = 0; i < n; ++i) {
         const uint32_t code = gather.hits[firstHit + i];
-        const uint32_t c = clusterOf(code);
+        const uint32_t c = targetOf(code, t);
         if (c == kNoTexel) continue;
         if (!(code & TexelGather::kFar)) row.add(c, nearWeight);
         else if (i < gather.fullRays[t]) row.add(c, farWeight);
@@ -378,17 +422,19 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   // front (up to clusterRays), round robin, each texel stratifying its share.
   const uint32_t clusterRays = uint32_t(options.clusterRays);
   const TexelLookup lookup(texels);
-  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0.0f);
+  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0);
   auto backRow = [&](uint32_t c, RowBuilder& row) {
     const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
     const uint32_t m = last - first;
     const uint32_t count = uint32_t(std::min<uint64_t>(clusterRays, uint64_t(rays) * m));
-    GatherBatch batch;
+    thread_local GatherBatch batch;  // its buffers are reused from row to row
+    batch.clear();
+    const sampling::Rng::ItemSeed seed{sampling::Rng::itemSeed(sampling::Stream::ClusterLinks, c)};
     for (uint32_t s = 0; s < count; ++s) {
       const uint32_t t = clusters.memberTexels[first + s % m];
       const uint32_t local = s / m;
       const uint32_t localCount = (count - s % m + m - 1) / m;
-      sampling::Rng rng(sampling::Stream::ClusterLinks, c, s);
+      sampling::Rng rng(seed, s);
       const sampling::Frame frame(-texels.normal[t]);
       batch.add(texels.backPosition(t), frame, -texels.geometricNormal[t],
                 sampling::stratified2(rng, local, localCount));
@@ -401,12 +447,13 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     }
     const GatherBatch::Summary seen = batch.summarize(tracer, 0, count);
     for (int i = 0; i < kShCount; ++i)
-      transport.clusterSky[size_t(c) * kShCount + size_t(i)] = float(seen.sky[i] * weight);
+      transport.clusterSky[size_t(c) * kShCount + size_t(i)] =
+          runtime::floatToHalf(float(seen.sky[i] * weight));
   };
   const size_t rowCount = size_t(points) + backClusters.size();
   progress.begin("form factors", rowCount);
   buildRows(
-      rowCount, progress, [&] { return RowBuilder(clusterCount); },
+      rowCount, targetCount, progress, [&] { return RowBuilder(targetCount); },
       [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
         if (r < points) pointRow(uint32_t(r), row);
         else backRow(backClusters[r - points], row);
@@ -420,11 +467,12 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   // Sky transfer per texel (its gather point's, as half floats) and per front cluster (the
   // area-weighted mean over its texels).
   transport.texelSky.assign(size_t(texelCount) * kShCount, 0);
-  for (uint32_t t = 0; t < texelCount; ++t)
+  parallelFor(texelCount, [&](size_t t) {
     if (texels.valid[t])
       for (int i = 0; i < kShCount; ++i)
-        transport.texelSky[size_t(t) * kShCount + size_t(i)] =
-            runtime::floatToHalf(gather.sky[size_t(t) * kShCount + size_t(i)]);
+        transport.texelSky[t * kShCount + size_t(i)] =
+            runtime::floatToHalf(gather.sky[t * kShCount + size_t(i)]);
+  }, 4096);
   // What each cluster gathers: its texels' gather points, area-weighted (a back cluster: its
   // own row).
   transport.clusterGather = runtime::SparseMatrix();
@@ -438,20 +486,27 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     } else {
       double area = 0.0;
       for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
-      float* sky = &transport.clusterSky[size_t(c) * kShCount];
+      double sky[kShCount] = {};
       for (uint32_t k = first; k < last; ++k) {
         const uint32_t t = clusters.memberTexels[k];
         if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
         const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
         entries.emplace_back(gather.pointOfTexel[t], float(share));
         for (int i = 0; i < kShCount; ++i)
-          sky[i] += float(share * double(gather.sky[size_t(t) * kShCount + size_t(i)]));
+          sky[i] += share * double(gather.sky[size_t(t) * kShCount + size_t(i)]);
       }
+      for (int i = 0; i < kShCount; ++i)
+        transport.clusterSky[size_t(c) * kShCount + size_t(i)] = runtime::floatToHalf(float(sky[i]));
     }
     appendNormalised(entries, transport.clusterGather);
   }
-  const std::vector<uint8_t> marks = markFilterNeighbours(tracer, texels, gather, options);
-  buildGatherMaps(texels, gather, marks, options, transport);
+  // How texels read the gather points and how the points smooth each other, built by the
+  // runtime from what the transport file stores (so a loaded file has the very same maps).
+  transport.filterPasses = std::max(0, options.filterPasses);
+  static_assert(TexelGather::kNoHit == kNoTexel, "invalid texels read no gather point");
+  transport.texelPoint = gather.pointOfTexel;
+  transport.texelNeighbours = markFilterNeighbours(tracer, texels, gather, options);
+  runtime::buildGatherMaps(transport);
   return Status::ok();
 }
 

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <vector>
 
 #include <embree3/rtcore.h>
 
@@ -380,55 +381,80 @@ bool RayTracer::occluded(const Ray& ray) const {
   return r.tfar < 0.0f;
 }
 
-void RayTracer::intersect(const Ray* rays, Hit* hits, size_t count) const {
-  impl_->count(count, Query::Intersect);
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  // Packets of 16 (rays of one texel share an origin, which Embree's hybrid traversal uses).
-  constexpr size_t kPacket = 16;
-  alignas(64) RTCRayHit16 packet;
-  alignas(64) int valid[kPacket];
-  for (size_t base = 0; base < count; base += kPacket) {
-    const size_t n = std::min(kPacket, count - base);
-    for (size_t i = 0; i < kPacket; ++i) {
-      const Ray* r = i < n ? &rays[base + i] : nullptr;
-      valid[i] = (r && traceable(*r)) ? -1 : 0;
-      RTCRayHit one;
-      if (valid[i]) toEmbree(*r, one);
-      else std::memset(&one, 0, sizeof(one));
-      packet.ray.org_x[i] = one.ray.org_x;
-      packet.ray.org_y[i] = one.ray.org_y;
-      packet.ray.org_z[i] = one.ray.org_z;
-      packet.ray.tnear[i] = one.ray.tnear;
-      packet.ray.dir_x[i] = one.ray.dir_x;
-      packet.ray.dir_y[i] = one.ray.dir_y;
-      packet.ray.dir_z[i] = one.ray.dir_z;
-      packet.ray.time[i] = 0.0f;
-      packet.ray.tfar[i] = valid[i] ? one.ray.tfar : -1.0f;
-      packet.ray.mask[i] = one.ray.mask;
-      packet.ray.id[i] = 0;
-      packet.ray.flags[i] = 0;
-      packet.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-      packet.hit.primID[i] = RTC_INVALID_GEOMETRY_ID;
-      packet.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+namespace {
+
+// A batch of rays in Embree's layout, ordered one direction octant after another (a stable
+// counting sort), for coherent ray streams: a batch's rays leave a few neighbouring texels, so
+// the rays of one octant form packets that traverse the BVH together. On the Cornell box that
+// makes about 1.3x the rays per second of rtcIntersect1 on the same rays, where unsorted
+// streams, or packets of one texel's rays (all over the hemisphere), are slower than it. Each
+// ray's hit is the one rtcIntersect1 would give.
+struct OctantStream {
+  std::vector<RTCRayHit> rays;
+  std::vector<uint32_t> order;  // position in the stream -> index of the caller's ray
+  std::vector<uint8_t> octant;  // per caller's ray, kUntraceable when Embree must not see it
+  static constexpr uint8_t kUntraceable = 8;
+
+  // Fills the stream from `in`, and an empty hit for every ray Embree must not see; returns
+  // how many rays the stream holds.
+  uint32_t fill(const Ray* in, Hit* hits, size_t count) {
+    octant.resize(count);
+    // The octants' sizes, counted as runs: consecutive rays mostly share an octant, and
+    // incrementing one counter per ray would make every increment wait for the one before.
+    uint32_t size[9] = {};
+    uint8_t run = kUntraceable;
+    uint32_t runLength = 0;
+    for (size_t i = 0; i < count; ++i) {
+      const Ray& r = in[i];
+      const uint8_t k = !traceable(r) ? kUntraceable
+                        : uint8_t((r.direction.x < 0.0f ? 1 : 0) |
+                                  (r.direction.y < 0.0f ? 2 : 0) |
+                                  (r.direction.z < 0.0f ? 4 : 0));
+      octant[i] = k;
+      if (k != run) {
+        size[run] += runLength;
+        run = k;
+        runLength = 0;
+      }
+      ++runLength;
     }
-    rtcIntersect16(valid, impl_->rtcScene, &context, &packet);
-    for (size_t i = 0; i < n; ++i) {
-      if (!valid[i]) {
-        hits[base + i] = Hit{};
+    size[run] += runLength;
+    uint32_t start[9];
+    for (int k = 0, at = 0; k < 9; ++k) {
+      start[k] = uint32_t(at);
+      at += int(size[k]);
+    }
+    const uint32_t traced = start[kUntraceable];
+    rays.resize(traced);
+    order.resize(traced);
+    for (size_t i = 0; i < count; ++i) {
+      const uint8_t k = octant[i];
+      if (k == kUntraceable) {
+        hits[i] = Hit{};
         continue;
       }
-      RTCRayHit one;
-      one.ray.tfar = packet.ray.tfar[i];
-      one.hit.geomID = packet.hit.geomID[i];
-      one.hit.primID = packet.hit.primID[i];
-      one.hit.u = packet.hit.u[i];
-      one.hit.v = packet.hit.v[i];
-      one.hit.Ng_x = packet.hit.Ng_x[i];
-      one.hit.Ng_y = packet.hit.Ng_y[i];
-      one.hit.Ng_z = packet.hit.Ng_z[i];
-      hits[base + i] = impl_->toHit(rays[base + i], one);
+      const uint32_t at = start[k]++;
+      order[at] = uint32_t(i);
+      toEmbree(in[i], rays[at]);
     }
+    return traced;
+  }
+};
+
+}  // namespace
+
+void RayTracer::intersect(const Ray* rays, Hit* hits, size_t count) const {
+  impl_->count(count, Query::Intersect);
+  thread_local OctantStream stream;
+  const uint32_t traced = stream.fill(rays, hits, count);
+  if (traced == 0) return;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  rtcIntersect1M(impl_->rtcScene, &context, stream.rays.data(), traced, sizeof(RTCRayHit));
+  for (uint32_t k = 0; k < traced; ++k) {
+    const uint32_t i = stream.order[k];
+    hits[i] = impl_->toHit(rays[i], stream.rays[k]);
   }
 }
 
@@ -436,15 +462,46 @@ void RayTracer::occluded(const Ray* rays, bool* blocked, size_t count) const {
   impl_->count(count, Query::Occluded);
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  for (size_t i = 0; i < count; ++i) {
-    if (!traceable(rays[i])) {
-      blocked[i] = false;
+  // Packets of 16 consecutive rays: a receiver's shadow rays toward one light share an origin
+  // and nearly a direction, and sight lines between neighbouring texels are short and close
+  // together, the coherent cases Embree's packet traversal is made for. On the Cornell box
+  // that is two to three times the rays per second of rtcOccluded1 on the same rays; sorting
+  // them by octant first, or a coherent stream as for intersect, is slower.
+  constexpr size_t kPacket = 16;
+  alignas(64) RTCRay16 packet;
+  alignas(64) int valid[kPacket];
+  for (size_t base = 0; base < count; base += kPacket) {
+    const size_t n = std::min(kPacket, count - base);
+    if (n == 1) {  // a lone ray: the single-ray call skips the packet's setup
+      blocked[base] = false;
+      if (!traceable(rays[base])) continue;
+      RTCRay r;
+      toEmbree(rays[base], r);
+      rtcOccluded1(impl_->rtcScene, &context, &r);
+      blocked[base] = r.tfar < 0.0f;
       continue;
     }
-    RTCRay r;
-    toEmbree(rays[i], r);
-    rtcOccluded1(impl_->rtcScene, &context, &r);
-    blocked[i] = r.tfar < 0.0f;
+    for (size_t i = 0; i < kPacket; ++i) {
+      const Ray* r = i < n ? &rays[base + i] : nullptr;
+      valid[i] = (r && traceable(*r)) ? -1 : 0;
+      RTCRay one;
+      if (valid[i]) toEmbree(*r, one);
+      else std::memset(&one, 0, sizeof(one));
+      packet.org_x[i] = one.org_x;
+      packet.org_y[i] = one.org_y;
+      packet.org_z[i] = one.org_z;
+      packet.tnear[i] = one.tnear;
+      packet.dir_x[i] = one.dir_x;
+      packet.dir_y[i] = one.dir_y;
+      packet.dir_z[i] = one.dir_z;
+      packet.time[i] = 0.0f;
+      packet.tfar[i] = valid[i] ? one.tfar : -1.0f;
+      packet.mask[i] = one.mask;
+      packet.id[i] = 0;
+      packet.flags[i] = 0;
+    }
+    rtcOccluded16(valid, impl_->rtcScene, &context, &packet);
+    for (size_t i = 0; i < n; ++i) blocked[base + i] = valid[i] && packet.tfar[i] < 0.0f;
   }
 }
 

@@ -38,7 +38,19 @@ inline uint64_t mix64(uint64_t x) {
 class Rng {
  public:
   Rng(Stream stream, uint64_t item, uint64_t sample)
-      : state_(mix64(mix64(mix64(uint64_t(stream)) ^ item) ^ sample)) {}
+      : state_(mix64(itemSeed(stream, item) ^ sample)) {}
+
+  // The part of the seed shared by every sample of one item: loops that seed a generator per
+  // sample (shadow rays) work it out once and call Rng(seed, sample), the same generator as
+  // Rng(stream, item, sample) for a third of the hashing.
+  static uint64_t itemSeed(Stream stream, uint64_t item) {
+    return mix64(mix64(uint64_t(stream)) ^ item);
+  }
+  struct ItemSeed {
+    uint64_t value;
+  };
+  Rng(ItemSeed seed, uint64_t sample) : state_(mix64(seed.value ^ sample)) {}
+
   // Uniform in [0, 1).
   float next() {
     state_ += 0x9e3779b97f4a7c15ull;
@@ -64,6 +76,23 @@ inline glm::vec2 stratified2(Rng& rng, uint32_t index, uint32_t count) {
   return {(float(index % g) + u.x) * inv, (float(index / g) + u.y) * inv};
 }
 
+// stratified2 for one count, its grid worked out once: point(rng, i) == stratified2(rng, i,
+// count), without a double-precision square root per sample (shadow rays take one each).
+class Stratified {
+ public:
+  explicit Stratified(uint32_t count)
+      : g_(uint32_t(std::sqrt(double(count)))), inv_(1.0f / float(g_)) {}
+  glm::vec2 point(Rng& rng, uint32_t index) const {
+    const glm::vec2 u = rng.next2();
+    if (g_ <= 1 || index >= g_ * g_) return u;
+    return {(float(index % g_) + u.x) * inv_, (float(index / g_) + u.y) * inv_};
+  }
+
+ private:
+  uint32_t g_;
+  float inv_;
+};
+
 // Interleaved stratification (Keller and Heidrich 2001) for the texels' gather rays: `count`
 // points on a gx × gy grid (gx·gy = count, gx ≥ gy, as square as count allows). point() jitters
 // each within one quarter of its cell, the quarter chosen by the texel's pixel parity (px, py):
@@ -87,6 +116,36 @@ struct InterleavedGrid {
     const float cy = float((index / gx) % gy) + 0.5f * (float(py & 1u) + u.y);
     return {cx / float(gx), cy / float(gy)};
   }
+
+  // The same points for index 0, 1, 2, ... in turn, without point()'s integer divisions (two
+  // per ray, a measurable share of generating a gather ray): next() is point(rng, i) for the
+  // i-th call, next(px, py) is point(rng, i, px, py).
+  class Walk {
+   public:
+    explicit Walk(const InterleavedGrid& grid) : grid_(grid) {}
+    glm::vec2 next(Rng& rng) {
+      const glm::vec2 u = rng.next2();
+      const glm::vec2 p{(float(x_) + u.x) / float(grid_.gx), (float(y_) + u.y) / float(grid_.gy)};
+      step();
+      return p;
+    }
+    glm::vec2 next(Rng& rng, uint32_t px, uint32_t py) {
+      const glm::vec2 u = rng.next2();
+      const float cx = float(x_) + 0.5f * (float(px & 1u) + u.x);
+      const float cy = float(y_) + 0.5f * (float(py & 1u) + u.y);
+      step();
+      return {cx / float(grid_.gx), cy / float(grid_.gy)};
+    }
+
+   private:
+    void step() {
+      if (++x_ < grid_.gx) return;
+      x_ = 0;
+      if (++y_ == grid_.gy) y_ = 0;
+    }
+    const InterleavedGrid& grid_;
+    uint32_t x_ = 0, y_ = 0;  // index % gx, (index / gx) % gy
+  };
 };
 
 // cos and sin of 2π·t for t in [0, 1): a minimax polynomial on an octant (|error| < 4e-7, as

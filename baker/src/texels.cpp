@@ -303,7 +303,17 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
   // its rays from its index, so the result does not depend on the thread count.
   const int leakRays = std::max(0, options.leakRays);
   progress.begin("texels: place samples", count);
+  // In two steps per block: every texel's surface point and tangent rays, then, once the
+  // block's rays are traced together (a coherent stream, RayTracer::intersect over an array:
+  // rays of neighbouring texels at the same angle run nearly parallel), where each sample goes.
+  struct Surface {
+    glm::vec3 point, normal;
+    float offset, texelSize;
+  };
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
+    std::vector<Surface> surfaces(end - begin);
+    std::vector<Ray> rays((end - begin) * size_t(leakRays));
+    std::vector<Hit> hits(rays.size());
     for (size_t ti = begin; ti < end; ++ti) {
       const PixelRecord& r = records[texelRecord[ti]];
       const scenes::Instance& inst = scene.instances[r.instance];
@@ -349,34 +359,19 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
 
       // Tangent rays just above the surface: the nearest back face of a single-sided surface
       // means the sample is behind it, so it moves through to that surface's front.
-      glm::vec3 sample = surface;
       glm::vec3 t, b;
       tangentFrame(geo, t, b);
       const glm::vec3 origin = surface + geo * offset;
       const float phase = hashUnit(uint32_t(ti), 0);
-      float nearest = std::numeric_limits<float>::infinity();
-      bool nearGeometry = false;
       for (int k = 0; k < leakRays; ++k) {
         const float angle = 2.0f * kPi * (float(k) + phase) / float(leakRays);
-        Ray ray;
+        Ray& ray = rays[(ti - begin) * size_t(leakRays) + size_t(k)];
         ray.origin = origin;
         ray.direction = std::cos(angle) * t + std::sin(angle) * b;
         ray.tfar = 1.5f * texelSize;
-        const Hit hit = tracer.intersect(ray);
-        // Geometry within the texel's footprint (its half-diagonal) may split it in two.
-        if (hit.valid() && hit.t < 0.75f * texelSize) nearGeometry = true;
-        if (backFaceOfSingleSided(tracer, hit) && hit.t < nearest) {
-          nearest = hit.t;
-          sample = surface + ray.direction * hit.t + hit.geometricNormal * offset;
-        }
       }
-      const glm::vec3 position = sample + geo * offset;
+      surfaces[ti - begin] = {surface, geo, offset, texelSize};
 
-      // Whether the sample is buried inside geometry is the gather's call (gatherTexels): its
-      // rays see the backs of single-sided walls from inside.
-      const bool valid = true;
-
-      set.position[ti] = position;
       set.normal[ti] = shading;
       set.geometricNormal[ti] = geo;
       set.area[ti] = float(r.touch.area);
@@ -389,8 +384,28 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
                                    r.touch.pixel / uint32_t(inst.lightmap.width));
       set.offset[ti] = offset;
       set.edge[ti] = texelSize;
+    }
+    tracer.intersect(rays.data(), hits.data(), rays.size());
+    for (size_t ti = begin; ti < end; ++ti) {
+      const Surface& s = surfaces[ti - begin];
+      glm::vec3 sample = s.point;
+      float nearest = std::numeric_limits<float>::infinity();
+      bool nearGeometry = false;
+      for (int k = 0; k < leakRays; ++k) {
+        const size_t j = (ti - begin) * size_t(leakRays) + size_t(k);
+        const Hit& hit = hits[j];
+        // Geometry within the texel's footprint (its half-diagonal) may split it in two.
+        if (hit.valid() && hit.t < 0.75f * s.texelSize) nearGeometry = true;
+        if (backFaceOfSingleSided(tracer, hit) && hit.t < nearest) {
+          nearest = hit.t;
+          sample = s.point + rays[j].direction * hit.t + hit.geometricNormal * s.offset;
+        }
+      }
+      set.position[ti] = sample + s.normal * s.offset;
       set.nearGeometry[ti] = nearGeometry ? 1 : 0;
-      set.valid[ti] = valid ? 1 : 0;
+      // Whether the sample is buried inside geometry is the gather's call (gatherTexels): its
+      // rays see the backs of single-sided walls from inside.
+      set.valid[ti] = 1;
     }
     progress.advance(end - begin);
   }, 256);

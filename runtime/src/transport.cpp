@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <sstream>
 
@@ -27,18 +28,24 @@ void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texel
   }
 }
 
+uint32_t SparseLinks::bitsFor(uint32_t targets) {
+  uint32_t bits = 1;
+  while (bits < 32 && (uint64_t(1) << bits) < uint64_t(targets)) ++bits;
+  return bits;
+}
+
 void SparseLinks::appendRow(const uint32_t* targets, const float* weights, size_t n) {
   float largest = 0.0f;
   for (size_t i = 0; i < n; ++i) largest = std::max(largest, weights[i]);
-  const float scale = largest > 0.0f ? largest / 65535.0f : 0.0f;
+  const float top = float(maxCode());
+  const float scale = largest > 0.0f ? largest / top : 0.0f;
   rowScale.push_back(scale);
   for (size_t i = 0; i < n && scale > 0.0f; ++i) {
     const float q = std::round(weights[i] / scale);
     if (!(q >= 1.0f)) continue;
-    target.push_back(targets[i]);
-    weight.push_back(uint16_t(std::min(q, 65535.0f)));
+    link.push_back((uint32_t(std::min(q, top)) << targetBits) | targets[i]);
   }
-  rowStart.push_back(uint32_t(target.size()));
+  rowStart.push_back(uint32_t(link.size()));
 }
 
 uint16_t floatToHalf(float value) {
@@ -124,21 +131,69 @@ bool checkRows(const std::vector<uint32_t>& rowStart, const std::vector<Column>&
 
 }  // namespace
 
+namespace {
+
+template <class T>
+size_t bytesOf(const std::vector<T>& v) {
+  return v.size() * sizeof(T);
+}
+
+size_t bytesOf(const SparseMatrix& m) {
+  return bytesOf(m.rowStart) + bytesOf(m.column) + bytesOf(m.weight);
+}
+
+}  // namespace
+
+size_t TransportData::memoryBytes() const {
+  size_t b = bytesOf(links.rowStart) + bytesOf(links.link) + bytesOf(links.rowScale) +
+             bytesOf(farClusters) + bytesOf(clusterGather) + bytesOf(pointFilter) +
+             bytesOf(texelGather) + bytesOf(texelPoint) + bytesOf(texelNeighbours) +
+             bytesOf(texelSky) + bytesOf(clusterSky) + bytesOf(clusterMaterial) +
+             bytesOf(clusterAlbedoTexture) + bytesOf(clusterEmissionTexture);
+  for (const Source& s : sources) b += bytesOf(s.texelTransfer) + bytesOf(s.clusterTransfer);
+  for (const AtlasLayout& a : atlases)
+    b += bytesOf(a.texelOfPixel) + bytesOf(a.mixPixel) + bytesOf(a.mixStart) +
+         bytesOf(a.mixTexel) + bytesOf(a.mixWeight);
+  return b;
+}
+
 std::string TransportData::validate() const {
   std::ostringstream why;
   const size_t texels = texelCount, clusters = clusterCount, points = gatherPointCount;
   // rows() is rowStart.size() - 1: an empty offset array would wrap around.
   if (links.rowStart.empty() || clusterGather.rowStart.empty() || pointFilter.rowStart.empty() ||
-      texelGather.rowStart.empty())
+      texelGather.rowStart.empty() || farClusters.rowStart.empty())
     return "a sparse matrix has no row offsets (not even the leading 0)";
   if (links.rows() < points) {
     why << "links: " << links.rows() << " rows, fewer than the " << points << " gather points";
     return why.str();
   }
   const size_t rows = links.rows();
-  if (!checkRows(links.rowStart, links.target, rows, clusters, "links", why)) return why.str();
-  if (links.weight.size() != links.target.size() || links.rowScale.size() != rows)
-    return "links: weights or row scales do not match the links";
+  // Far clusters: each a mix of clusters, and with the clusters no more than links address.
+  if (farClusters.rows() >= kMaxLinkTargets ||
+      size_t(clusters) + farClusters.rows() > kMaxLinkTargets) {
+    why << "links: " << clusters << " clusters and " << farClusters.rows()
+        << " far clusters, more than links address (" << kMaxLinkTargets << ")";
+    return why.str();
+  }
+  const size_t targets = clusters + farClusters.rows();
+  if (!checkRows(farClusters.rowStart, farClusters.column, farClusters.rows(), clusters,
+                 "far clusters", why))
+    return why.str();
+  if (farClusters.weight.size() != farClusters.column.size())
+    return "far clusters: as many weights as columns";
+  if (links.targetBits < 1 || links.targetBits > 32 - kMinWeightBits) {
+    why << "links: " << links.targetBits << " target bits, expected 1 to " << 32 - kMinWeightBits;
+    return why.str();
+  }
+  // The rows' shape here; their targets (the low bits of each link) below.
+  if (!checkRows(links.rowStart, links.link, rows, SIZE_MAX, "links", why)) return why.str();
+  for (size_t k = 0; k < links.size(); ++k)
+    if (links.targetAt(k) >= targets) {
+      why << "links: entry " << k << " refers to " << links.targetAt(k) << " of " << targets;
+      return why.str();
+    }
+  if (links.rowScale.size() != rows) return "links: row scales do not match the rows";
   if (!checkRows(clusterGather.rowStart, clusterGather.column, clusters, rows, "cluster gather", why) ||
       !checkRows(pointFilter.rowStart, pointFilter.column,
                  pointFilter.rows() == 0 ? 0 : points, points, "gather point filter", why) ||
@@ -150,6 +205,8 @@ std::string TransportData::validate() const {
     return "a sparse matrix has as many weights as columns";
   if (filterPasses < 0 || (filterPasses > 0 && pointFilter.rows() != points))
     return "the gather point filter does not cover the gather points";
+  if (!texelPoint.empty() || !texelNeighbours.empty())
+    if (std::string why2 = checkGatherSource(*this); !why2.empty()) return why2;
   if (clusterMaterial.size() != clusters || clusterAlbedoTexture.size() != clusters ||
       clusterEmissionTexture.size() != clusters) {
     why << "per-cluster material arrays do not have " << clusters << " entries";

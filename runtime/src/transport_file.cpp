@@ -58,15 +58,15 @@ constexpr const char* kAtlases = "ATLS";
 constexpr const char* kMaterials = "MATL";
 constexpr const char* kSources = "SRCS";
 constexpr const char* kClusters = "CLUS";
+constexpr const char* kFarClusters = "FARC";
 constexpr const char* kLinks = "LINK";
 constexpr const char* kClusterGather = "CGAT";
-constexpr const char* kPointFilter = "PFLT";
-constexpr const char* kTexelGather = "TGAT";
+constexpr const char* kGatherMaps = "GMAP";
 constexpr const char* kTexelSky = "TSKY";
 constexpr const char* kClusterSky = "CSKY";
 constexpr const char* kRequired[] = {kInfo,  kAtlases,       kMaterials,   kSources,
-                                     kClusters, kLinks,      kClusterGather, kPointFilter,
-                                     kTexelGather, kTexelSky, kClusterSky};
+                                     kClusters, kFarClusters, kLinks, kClusterGather, kGatherMaps,
+                                     kTexelSky, kClusterSky};
 constexpr size_t kSectionCount = sizeof(kRequired) / sizeof(kRequired[0]);
 
 constexpr size_t kEntrySize = 32;    // one section table entry
@@ -194,22 +194,25 @@ const SectionWriter kWriters[] = {
        o.array(d.clusterAlbedoTexture);
        o.array(d.clusterEmissionTexture);
      }},
+    {kFarClusters, 0,
+     [](const TransportData& d, Out& o) {
+       o.sparse(d.farClusters.rowStart, d.farClusters.column, d.farClusters.weight);
+     }},
     {kLinks, 0,
      [](const TransportData& d, Out& o) {
-       o.sparse(d.links.rowStart, d.links.target, d.links.weight);
+       o.scalar(d.links.targetBits);
+       o.array(d.links.rowStart);
+       o.array(d.links.link);
        o.array(d.links.rowScale);
      }},
     {kClusterGather, 0,
      [](const TransportData& d, Out& o) {
        o.sparse(d.clusterGather.rowStart, d.clusterGather.column, d.clusterGather.weight);
      }},
-    {kPointFilter, 0,
+    {kGatherMaps, 0,
      [](const TransportData& d, Out& o) {
-       o.sparse(d.pointFilter.rowStart, d.pointFilter.column, d.pointFilter.weight);
-     }},
-    {kTexelGather, 0,
-     [](const TransportData& d, Out& o) {
-       o.sparse(d.texelGather.rowStart, d.texelGather.column, d.texelGather.weight);
+       o.array(d.texelPoint);
+       o.array(d.texelNeighbours);
      }},
     {kTexelSky, 0, [](const TransportData& d, Out& o) { o.array(d.texelSky); }},
     {kClusterSky, 0, [](const TransportData& d, Out& o) { o.array(d.clusterSky); }},
@@ -223,10 +226,10 @@ uint64_t sectionCount(const TransportData& d, const char* id) {
   if (id == kMaterials) return d.materials.size();
   if (id == kSources) return d.sources.size();
   if (id == kClusters) return d.clusterMaterial.size();
+  if (id == kFarClusters) return rowsOf(d.farClusters.rowStart);
   if (id == kLinks) return rowsOf(d.links.rowStart);
   if (id == kClusterGather) return rowsOf(d.clusterGather.rowStart);
-  if (id == kPointFilter) return rowsOf(d.pointFilter.rowStart);
-  if (id == kTexelGather) return rowsOf(d.texelGather.rowStart);
+  if (id == kGatherMaps) return d.texelPoint.size();
   if (id == kTexelSky) return d.texelSky.size();
   return d.clusterSky.size();  // kClusterSky
 }
@@ -400,22 +403,27 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
   }
   const std::vector<uint32_t>* rowStart = nullptr;
   if (id == kLinks) {
-    if (!readSparse(in, d.links.rowStart, d.links.target, d.links.weight) ||
+    if (!in.scalar(d.links.targetBits, "target bits") ||
+        !in.rowStart(d.links.rowStart, "row offsets") || !in.array(d.links.link, "links") ||
         !in.array(d.links.rowScale, "row scales"))
       return false;
     rowStart = &d.links.rowStart;
+  } else if (id == kFarClusters) {
+    if (!readSparse(in, d.farClusters.rowStart, d.farClusters.column, d.farClusters.weight))
+      return false;
+    rowStart = &d.farClusters.rowStart;
   } else if (id == kClusterGather) {
     if (!readSparse(in, d.clusterGather.rowStart, d.clusterGather.column, d.clusterGather.weight))
       return false;
     rowStart = &d.clusterGather.rowStart;
-  } else if (id == kPointFilter) {
-    if (!readSparse(in, d.pointFilter.rowStart, d.pointFilter.column, d.pointFilter.weight))
+  } else if (id == kGatherMaps) {
+    if (!in.array(d.texelPoint, "texel points") ||
+        !in.array(d.texelNeighbours, "texel neighbours"))
       return false;
-    rowStart = &d.pointFilter.rowStart;
-  } else if (id == kTexelGather) {
-    if (!readSparse(in, d.texelGather.rowStart, d.texelGather.column, d.texelGather.weight))
-      return false;
-    rowStart = &d.texelGather.rowStart;
+    if (count != d.texelPoint.size())
+      return in.fail("the table says " + std::to_string(count) + " texels, the section has " +
+                     std::to_string(d.texelPoint.size()));
+    return true;
   }
   if (rowStart) {
     if (count != rowsOf(*rowStart))
@@ -443,10 +451,12 @@ const char* sectionOfComplaint(const std::string& why) {
     const char* prefix;
     const char* id;
   } kPrefixes[] = {{"links", kLinks},
+                   {"far clusters", kFarClusters},
                    {"cluster gather", kClusterGather},
-                   {"gather point filter", kPointFilter},
-                   {"the gather point filter", kPointFilter},
-                   {"texel gather", kTexelGather},
+                   {"gather maps", kGatherMaps},
+                   {"gather point filter", kGatherMaps},
+                   {"the gather point filter", kGatherMaps},
+                   {"texel gather", kGatherMaps},
                    {"texel sky", kTexelSky},
                    {"cluster sky", kClusterSky},
                    {"per-cluster", kClusters},
@@ -584,6 +594,20 @@ bool parseImage(const uint8_t* bytes, size_t size, TransportData& d, std::string
     }
   }
 
+  // The texels' and gather points' maps from their source (as the baker made them), once the
+  // source is sound and the gather points are no more than the rows read (which bounds what
+  // the maps allocate by the file's size).
+  if (std::string bad = checkGatherSource(d); !bad.empty()) {
+    why = "section '" + std::string(kGatherMaps) + "': " + bad;
+    return false;
+  }
+  if (d.links.rowStart.empty() || d.links.rows() < d.gatherPointCount) {
+    why = "section '" + std::string(kLinks) + "': fewer rows than the " +
+          std::to_string(d.gatherPointCount) + " gather points";
+    return false;
+  }
+  buildGatherMaps(d);
+
   // Every index within its counts.
   const std::string complaint = d.validate();
   if (!complaint.empty()) {
@@ -684,7 +708,8 @@ bool saveTransport(const TransportData& data, const std::string& path, std::stri
     if (error) *error = path + ": " + why;
     return false;
   };
-  const std::string complaint = data.validate();
+  std::string complaint = data.validate();
+  if (complaint.empty()) complaint = checkGatherSource(data);  // the file stores the maps' source
   if (!complaint.empty()) return failed("not saved, the transport is invalid: " + complaint);
   std::vector<uint8_t> bytes;
   try {

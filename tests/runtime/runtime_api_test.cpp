@@ -152,14 +152,18 @@ TransportData makeScene(uint32_t scale = 1, uint64_t seed = 7) {
     }
   };
   average(d.clusterGather, d.clusterCount, rows, 2);
-  average(d.pointFilter, d.gatherPointCount, d.gatherPointCount, 3);
+  // Texels read random gather points and smooth with random atlas neighbours.
   d.filterPasses = 1;
-  average(d.texelGather, d.texelCount, d.gatherPointCount, 2);
+  for (uint32_t t = 0; t < d.texelCount; ++t) {
+    d.texelPoint.push_back(rng.below(d.gatherPointCount));
+    d.texelNeighbours.push_back(uint8_t(rng.below(256)));
+  }
+  buildGatherMaps(d);
 
   for (uint32_t i = 0; i < d.texelCount * kShCount; ++i)
     d.texelSky.push_back(floatToHalf(i % kShCount == 0 ? 0.3f * rng.unit() : 0.05f * rng.unit()));
   for (uint32_t i = 0; i < d.clusterCount * kShCount; ++i)
-    d.clusterSky.push_back(i % kShCount == 0 ? 0.3f * rng.unit() : 0.05f * rng.unit());
+    d.clusterSky.push_back(floatToHalf(i % kShCount == 0 ? 0.3f * rng.unit() : 0.05f * rng.unit()));
   for (int i = 0; i < kShCount; ++i) d.skySh[i] = glm::vec3(0.2f, 0.3f, 0.5f) * (i == 0 ? 1.0f : 0.1f);
   d.indirectIntensity = 1.0f;
   d.albedoBoost = 1.0f;

@@ -133,5 +133,39 @@ TEST(RuntimeSolver, GatherPointFilterAndTexelGatherApplyTheirWeights) {
   }
 }
 
+// A far cluster's reflected light is the weighted mean of its clusters', and a row that links it
+// gathers that mean: two lit clusters (R = 0.5 and 0.25) under one far cluster weighted 3:1.
+TEST(RuntimeSolver, FarClustersGatherTheirClustersMean) {
+  TransportData d;
+  d.clusterCount = 2;
+  d.gatherPointCount = 1;
+  d.texelCount = 1;
+  d.materials.push_back({"grey", glm::vec3(0.5f), glm::vec3(0.0f)});
+  d.clusterMaterial = {0, 0};
+  d.clusterAlbedoTexture.assign(2, glm::vec3(1.0f));
+  d.clusterEmissionTexture.assign(2, glm::vec3(1.0f));
+  Source light;
+  light.name = "sun";
+  light.texelTransfer = {0.0f};
+  light.clusterTransfer = {1.0f, 0.5f};
+  d.sources.push_back(light);
+  const uint32_t both[2] = {0, 1}, far = 2, none = 0;
+  const float mean[2] = {0.75f, 0.25f}, half = 0.5f, zero = 0.0f, one = 1.0f;
+  d.farClusters.appendRow(both, mean, 2);
+  d.links.appendRow(&far, &half, 1);           // the point sees the far cluster with F = 0.5
+  d.clusterGather.appendRow(&none, &zero, 1);  // the clusters gather nothing back
+  d.clusterGather.appendRow(&none, &zero, 1);
+  d.texelGather.appendRow(&none, &one, 1);      // the texel reads the point
+  ASSERT_EQ(d.linkTargetCount(), 3u);
+  ASSERT_EQ(d.validate(), "");
+  Solver solver(d);
+  solver.solve();
+  const float farR = 0.75f * 0.5f + 0.25f * 0.25f;
+  EXPECT_NEAR(solver.rowGathered()[0].x, 0.5f * farR, 1e-6f);
+  std::vector<glm::vec3> direct, indirect;
+  solver.gatherTexels(direct, indirect);
+  EXPECT_NEAR(indirect[0].x, 0.5f * farR, 1e-6f);
+}
+
 }  // namespace
 }  // namespace afterglow::runtime

@@ -37,7 +37,16 @@ struct ClusterOptions {
                                    //   harmonic ray distance (<= 0: off)
   float maxDistanceRatio = 4.0f;   // texels whose ray distances differ by more are split
                                    //   apart (<= 1: off)
+  // Far clusters (LinkOptions::farDistance), for the links of far-away hits: farLevels levels
+  // of the same clustering, each farScale times wider than the one below. 0 levels or a
+  // scale <= 1: none.
+  float farScale = 4.0f;
+  int farLevels = 1;
 };
+
+// The options of far cluster level `level` (1 = the first above the clusters): the clusters'
+// sizes scaled by farScale^level.
+ClusterOptions farClusterOptions(const ClusterOptions& options, int level = 1);
 
 struct Clusters {
   std::vector<uint32_t> texelCluster;  // per texel: its (front) cluster (kNoTexel for invalid)

@@ -112,7 +112,11 @@ class RayTracer {
   Hit intersect(const Ray& ray) const;
   // true when anything (after alpha cut-outs and masks) lies within [tnear, tfar].
   bool occluded(const Ray& ray) const;
-  // Batched forms: same results as the single-ray calls, cheaper bookkeeping per ray.
+  // Batched forms: same results as the single-ray calls, and faster: Embree traces them
+  // together (see raytracer.cpp). Intersect batches go as coherent streams sorted by direction
+  // octant, best with rays from a few neighbouring points (hundreds to a few thousand);
+  // occluded batches go as packets of 16 consecutive rays, best when neighbours in the batch
+  // share an origin and nearly a direction (one receiver's shadow rays toward one light).
   void intersect(const Ray* rays, Hit* hits, size_t count) const;
   void occluded(const Ray* rays, bool* blocked, size_t count) const;
 

@@ -40,6 +40,12 @@ struct LinkOptions {
   // full set of rays, instead of sharing a 2×2 block's: bounced light changes over a few
   // texels there.
   float blockDistance = 8.0f;
+  // Hierarchical links: a gather point's hit farther than this × the radius of the far
+  // cluster it lands in (ClusterOptions::farScale) links to that far cluster, so the many
+  // rays that reach distant surfaces share links (fewer links: a smaller transport and a
+  // faster bounce). The far cluster's light is its clusters' mean, which differs from the hit
+  // cluster's own by less the farther it is seen from. <= 0: every hit links its cluster.
+  float farDistance = 2.0f;    // far cluster radii
   int clusterRays = 256;       // rays per back-side cluster of double-sided geometry (fewer
                                //   for small ones: at most texelRays per texel)
   // Links below this form factor are left out and the rest of their row scaled up to keep its
@@ -69,10 +75,15 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
 // The links of the gather points and of the back-side clusters (which cast rays of their own),
 // how clusters and texels read the gather points, the smoothing between gather points, sky
 // transfer, the materials and per-cluster texture modulation.
+// With far cluster levels (coarser clusterings of the same texels, finest first; their back
+// sides are not used), a gather point's hit links the coarsest far cluster it lies farther
+// from than LinkOptions::farDistance × that cluster's radius
+// (runtime::TransportData::farClusters), else the hit texel's cluster.
 Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const TexelSet& texels,
                     const TexelGather& gather, const Clusters& clusters,
                     const LinkOptions& options, runtime::TransportData& transport,
-                    Progress& progress = nullProgress());
+                    Progress& progress = nullProgress(),
+                    const std::vector<Clusters>& farLevels = {});
 
 struct DirectOptions {
   // Shadow rays per texel and source: a first pass of lightSamples (lights with a size) or

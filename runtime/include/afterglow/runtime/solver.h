@@ -1,14 +1,17 @@
 // The radiosity solver shared by the offline bake and the relighting runtime.
 //
 //   cluster reflected light   R_c = ρ_c · (D_c + S_c + Σ_r A_cr V_r)
-//   gathered light per row    V_r = Σ_j F_rj R_j          (rows: gather points, back clusters)
+//   gathered light per row    V_r = Σ_j F_rj R_j          (rows: gather points, back clusters;
+//                                                          j: clusters, then far clusters,
+//                                                          R_f = Σ_c M_fc R_c)
 //   texel value (E/π)         T_t = D_t + S_t + indirectIntensity · Σ_p B_tp (Φ^n V)_p
 //
 // D is direct light from punctual lights and emissive surfaces (sampled explicitly, which is why
 // emission enters texels and clusters through D and the links carry only R), S is sky light,
-// F the form factors (TransportData::links), A the clusters' gather (clusterGather), Φ one pass
-// of smoothing between gather points (pointFilter, n = filterPasses) and B the texels'
-// interpolation (texelGather). For bounces, D_c uses each light's bounceIntensity.
+// F the form factors (TransportData::links), M the far clusters' mix of clusters (farClusters),
+// A the clusters' gather (clusterGather), Φ one pass of smoothing between gather points
+// (pointFilter, n = filterPasses) and B the texels' interpolation (texelGather). For bounces,
+// D_c uses each light's bounceIntensity.
 //
 // One iterate() is one bounce: the clusters take up what the rows gathered, then every row
 // gathers again (the links, the cost of a bounce). After n passes from reset() the texels hold n
@@ -101,7 +104,8 @@ class Solver {
   std::vector<glm::vec3> albedo_;           // boosted diffuse albedo per cluster
   std::vector<glm::vec3> clusterDirect_;    // D_c (with bounceIntensity) + S_c
   std::vector<glm::vec3> reflected_;        // R_c
-  std::vector<glm::vec4> reflected4_;       // R_c padded to 16 bytes for the links' inner loop
+  std::vector<glm::vec4> reflected4_;       // R_c padded to 16 bytes for the links' inner
+                                            //   loop, then the far clusters' R_f
   std::vector<glm::vec4> gathered_;         // V_r
   mutable std::vector<glm::vec4> filtered_; // smoothing passes over the gather points
   mutable std::vector<glm::vec4> scratch_;

@@ -24,22 +24,43 @@ constexpr uint32_t kNoTexel = 0xffffffffu;
 constexpr int kNeighbourOffsets[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0},
                                          {1, 0},   {-1, 1}, {0, 1},  {1, 1}};
 
-// Row-compressed sparse matrix of form factors, stored quantised: row r links to target[k] with
-// weight[k] × rowScale[r] for k in [rowStart[r], rowStart[r+1]), targets ascending. A weight is
-// the fraction of a point's cosine-weighted hemisphere that sees the target cluster; 16 bits
-// against the row's largest weight keep it within 1/65535 of that largest (a row gathers
-// `scale × Σ weight[k] R[target[k]]`, one multiply per row), at 6 bytes a link.
+// Row-compressed sparse matrix of form factors, stored quantised in 4 bytes a link (the links
+// are most of the transport, and streaming them is most of a bounce): a link's low targetBits
+// bits are its target cluster, the rest a weight code, so row r links to target(k) with weight
+// code(k) × rowScale[r] for k in [rowStart[r], rowStart[r+1]), targets ascending. A weight is
+// the fraction of a point's cosine-weighted hemisphere that sees the target cluster; codes are
+// relative to the row's largest weight, which takes the largest code (2^w - 1 for w =
+// 32 - targetBits weight bits, at most 16), so each weight is within half a code of that largest:
+// 1/65535 of it when targets fit in 16 bits, 1/16383 with 18 (Sponza's 150k clusters).
+constexpr uint32_t kMinWeightBits = 10;
+constexpr uint32_t kMaxWeightBits = 16;
+constexpr uint32_t kMaxLinkTargets = 1u << (32 - kMinWeightBits);
+
 struct SparseLinks {
+  // Default: any target below kMaxLinkTargets, with the fewest weight bits.
+  uint32_t targetBits = 32 - kMinWeightBits;
   std::vector<uint32_t> rowStart{0};
-  std::vector<uint32_t> target;
-  std::vector<uint16_t> weight;
+  std::vector<uint32_t> link;
   std::vector<float> rowScale;
 
+  SparseLinks() = default;
+  // Links to targets [0, targets); targets must not exceed kMaxLinkTargets.
+  explicit SparseLinks(uint32_t targets) : targetBits(bitsFor(targets)) {}
+  // The fewest bits that hold every index below `targets` (at least 1).
+  static uint32_t bitsFor(uint32_t targets);
+
   size_t rows() const { return rowStart.size() - 1; }
-  size_t size() const { return target.size(); }
-  float weightAt(size_t row, size_t k) const { return float(weight[k]) * rowScale[row]; }
-  // Appends a row: n (target, form factor) pairs with ascending targets. Weights that round
-  // to zero against the row's largest are left out.
+  size_t size() const { return link.size(); }
+  uint32_t targetMask() const { return (1u << targetBits) - 1u; }
+  uint32_t maxCode() const {
+    return targetBits >= 32 - kMaxWeightBits ? 0xffffffffu >> targetBits : (1u << kMaxWeightBits) - 1u;
+  }
+  uint32_t targetAt(size_t k) const { return link[k] & targetMask(); }
+  float weightAt(size_t row, size_t k) const {
+    return float(link[k] >> targetBits) * rowScale[row];
+  }
+  // Appends a row: n (target, form factor) pairs with ascending targets below 2^targetBits.
+  // Weights that round to zero against the row's largest are left out.
   void appendRow(const uint32_t* targets, const float* weights, size_t n);
 };
 
@@ -132,9 +153,17 @@ struct TransportData {
   std::vector<glm::vec3> clusterAlbedoTexture;
   std::vector<glm::vec3> clusterEmissionTexture;
 
+  // Far clusters: coarser clusters (a few clusters' worth of surface each) that stand in for
+  // their clusters where a row sees them from far away, as in hierarchical radiosity: a far
+  // ray lands in a far cluster, whose reflected light is the area-weighted mean of the
+  // clusters under it, so the rays of a gather point that reach distant surfaces share links
+  // instead of each making one. Far cluster f -> clusters (weights sum to 1); its rows are the
+  // far clusters, so their count is farClusters.rows().
+  SparseMatrix farClusters;
   // Form factors, a row per gather point (rows 0 .. gatherPointCount-1) and then a row per
   // back-side cluster of double-sided geometry (which has no texels, and gathers with rays of
-  // its own): row -> the clusters it sees.
+  // its own): row -> what it sees, clusters (targets below clusterCount) and far clusters
+  // (target clusterCount + f).
   SparseLinks links;
   // Cluster -> rows: a cluster's incident bounced light, the area-weighted mean of its texels'
   // gather points' rows (weights sum to 1), or its own row for a back-side cluster.
@@ -148,22 +177,44 @@ struct TransportData {
   // points of the texels around it on the same surface (weights sum to 1). Invalid texels have
   // empty rows.
   SparseMatrix texelGather;
+  // The source of pointFilter and texelGather, which buildGatherMaps() makes from it (the
+  // transport file stores this, five bytes a texel, instead of the maps): per texel its gather
+  // point (kNoTexel for invalid texels), and the atlas neighbours it smooths with (bit k: the
+  // neighbour at kNeighbourOffsets[k]). Both empty when the maps were made some other way
+  // (such a transport solves, but cannot be saved).
+  std::vector<uint32_t> texelPoint;
+  std::vector<uint8_t> texelNeighbours;
 
-  // Sky transfer: E/π = Σ_i skySh[i] * transfer[i] (per texel / cluster, kShCount values each;
-  // half floats per texel, floats per cluster).
+  // Sky transfer: E/π = Σ_i skySh[i] * transfer[i] (per texel / cluster, kShCount values each,
+  // half floats: a transfer is a fraction of the hemisphere, well inside their range).
   std::vector<uint16_t> texelSky;
-  std::vector<float> clusterSky;
+  std::vector<uint16_t> clusterSky;
 
   // Bake-level settings (Unity semantics; 1 is physically correct).
   float indirectIntensity = 1.0f;  // scales all bounced light reaching texels
   float albedoBoost = 1.0f;        // >= 1, pushes albedo toward white for bounces
   glm::vec3 skySh[kShCount] = {};  // sky radiance as SH L2 (RGB)
 
+  // What links may target: the clusters, then the far clusters.
+  uint32_t linkTargetCount() const { return clusterCount + uint32_t(farClusters.rows()); }
   // The number of rows of `links` that belong to back-side clusters.
   uint32_t backRowCount() const { return uint32_t(links.rows()) - gatherPointCount; }
   // Empty when every array agrees with the counts (what the solver indexes without checks),
   // else what is wrong.
   std::string validate() const;
+  // Bytes its arrays hold (a Solver's own buffers come on top: a few floats a texel and a
+  // cluster).
+  size_t memoryBytes() const;
 };
+
+// texelGather and pointFilter (smoothing only with filterPasses > 0) from texelPoint,
+// texelNeighbours and the atlases: a texel mixes its own gather point (weight 4) with those of
+// its marked neighbours (2 along the axes, 1 on the diagonals), normalised; a gather point's
+// smoothing row is the mean of its texels' mixes, its own weight counted once per texel.
+// Requires checkGatherSource() to be empty.
+void buildGatherMaps(TransportData& data);
+// Empty when texelPoint and texelNeighbours have an entry per texel and every gather point
+// exists, else what is wrong.
+std::string checkGatherSource(const TransportData& data);
 
 }  // namespace afterglow::runtime

@@ -1,7 +1,7 @@
 // The transport file (OUT/transport.agt): TransportData on disk, written by the bake and loaded
 // by engines. GLM and the standard library only, like the rest of the runtime.
 //
-// Format, version 1. Everything is little-endian; floats are IEEE binary32, halves binary16.
+// Format, version 2. Everything is little-endian; floats are IEEE binary32, halves binary16.
 //
 //   header (40 bytes, at 0)
 //     0  char[8]  magic "AGLOWTR\0"
@@ -25,7 +25,7 @@
 //              8 bytes of padding, then the elements packed: every array's data starts 16-byte
 //              aligned in the file, so it can be memcpy'd in one go (or used in place).
 //
-// Sections of version 1 (all required; any other id is skipped, so a later writer of the same
+// Sections of version 2 (all required; any other id is skipped, so a later writer of the same
 // version may add sections that older readers ignore). "count" is the table's element count,
 // which the reader checks against the payload.
 //   INFO  count 1: u32 texelCount, u32 clusterCount, u32 gatherPointCount, i32 filterPasses,
@@ -38,19 +38,24 @@
 //         f32 bounceIntensity, arrays f32 texelTransfer, f32 clusterTransfer
 //   CLUS  count = clusters: arrays u32 clusterMaterial, vec3 clusterAlbedoTexture,
 //         vec3 clusterEmissionTexture
-//   LINK  count = rows: arrays u32 rowStart, u32 target, u16 weight, f32 rowScale
+//   FARC  count = far clusters: arrays u32 rowStart, u32 column, f32 weight (far cluster ->
+//         clusters)
+//   LINK  count = rows: u32 targetBits, arrays u32 rowStart, u32 link, f32 rowScale (a link
+//         packs target | weight code << targetBits: see SparseLinks)
 //   CGAT  count = rows: cluster gather, arrays u32 rowStart, u32 column, f32 weight
-//   PFLT  count = rows: gather point filter, the same three arrays
-//   TGAT  count = rows: texel gather, the same three arrays
+//   GMAP  count = texels: arrays u32 texelPoint, u8 texelNeighbours (the source of the gather
+//         point filter and the texel gather, which the reader rebuilds: buildGatherMaps)
 //   TSKY  count = values: array u16 texelSky (half floats)
-//   CSKY  count = values: array f32 clusterSky
+//   CSKY  count = values: array u16 clusterSky (half floats)
 // (rows = the rowStart array's length minus one.)
 //
 // The reader checks, in this order: magic, version, header and file sizes, checksum, the section
 // table (every section inside the file, aligned, ascending, no duplicates, required ones present),
 // then each payload field against what is left of its section before allocating anything, so no
-// input makes it allocate much more than the file's size; then TransportData::validate() (every
-// index within its counts), whose complaint is reported against the section it concerns.
+// input makes it allocate much more than the file's size; then the gather map source
+// (checkGatherSource), from which it rebuilds the texel gather and the gather point filter
+// (buildGatherMaps); then TransportData::validate() (every index within its counts), whose
+// complaint is reported against the section it concerns.
 #pragma once
 
 #include <cstddef>
@@ -62,7 +67,7 @@
 
 namespace afterglow::runtime {
 
-constexpr uint32_t kTransportVersion = 1;
+constexpr uint32_t kTransportVersion = 2;  // 2: 4-byte links, far clusters, gather map source
 constexpr char kTransportMagic[8] = {'A', 'G', 'L', 'O', 'W', 'T', 'R', '\0'};
 constexpr uint32_t kTransportHeaderSize = 40;
 

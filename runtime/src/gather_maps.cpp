@@ -1,0 +1,123 @@
+// The texels' and gather points' maps (TransportData::texelGather, pointFilter) from their
+// source: each texel's gather point and which atlas neighbours it may smooth with. The baker
+// builds them here and the loader rebuilds them here, so a loaded transport holds the very maps
+// the bake solved with, while the file stores five bytes a texel instead of the maps' forty.
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+#include "afterglow/runtime/transport.h"
+
+namespace afterglow::runtime {
+
+namespace {
+
+// The tent over a texel's marked neighbours: 4 for itself, 2 along the axes, 1 on diagonals.
+float tentWeight(int k) {
+  return (kNeighbourOffsets[k][0] == 0 || kNeighbourOffsets[k][1] == 0) ? 2.0f : 1.0f;
+}
+
+// Sorts (column, weight) pairs by column, sums duplicates and scales the row to sum to one.
+// The weights are small integers, so the sums are exact in any order.
+void appendNormalised(std::vector<std::pair<uint32_t, float>>& entries, SparseMatrix& m) {
+  std::sort(entries.begin(), entries.end());
+  double total = 0.0;
+  for (const auto& e : entries) total += double(e.second);
+  for (size_t i = 0; i < entries.size();) {
+    size_t j = i;
+    double w = 0.0;
+    while (j < entries.size() && entries[j].first == entries[i].first) w += double(entries[j++].second);
+    m.column.push_back(entries[i].first);
+    m.weight.push_back(total > 0.0 ? float(w / total) : 0.0f);
+    i = j;
+  }
+  m.rowStart.push_back(uint32_t(m.column.size()));
+}
+
+}  // namespace
+
+std::string checkGatherSource(const TransportData& d) {
+  if (d.texelPoint.size() != d.texelCount || d.texelNeighbours.size() != d.texelCount)
+    return "gather maps: " + std::to_string(d.texelPoint.size()) + " texel points and " +
+           std::to_string(d.texelNeighbours.size()) + " neighbour masks for " +
+           std::to_string(d.texelCount) + " texels";
+  for (size_t t = 0; t < d.texelPoint.size(); ++t)
+    if (d.texelPoint[t] != kNoTexel && d.texelPoint[t] >= d.gatherPointCount)
+      return "gather maps: texel " + std::to_string(t) + " reads gather point " +
+             std::to_string(d.texelPoint[t]) + " of " + std::to_string(d.gatherPointCount);
+  if (d.filterPasses < 0) return "gather maps: negative filter passes";
+  return {};
+}
+
+void buildGatherMaps(TransportData& d) {
+  const uint32_t count = d.texelCount, points = d.gatherPointCount;
+  // Where each texel sits: its atlas and pixel (texels are numbered in atlas scan order, one
+  // pixel each; a texel no pixel names has no neighbours, and neither have the texels of an
+  // atlas whose size does not match its pixels, which validate() refuses afterwards).
+  std::vector<uint32_t> atlasOf(count, kNoTexel), pixelOf(count, 0);
+  for (size_t a = 0; a < d.atlases.size(); ++a) {
+    const AtlasLayout& layout = d.atlases[a];
+    if (layout.width <= 0 || layout.height <= 0 ||
+        layout.texelOfPixel.size() != size_t(layout.width) * size_t(layout.height))
+      continue;
+    const std::vector<uint32_t>& pixels = layout.texelOfPixel;
+    for (size_t p = 0; p < pixels.size(); ++p) {
+      const uint32_t t = pixels[p];
+      if (t < count && atlasOf[t] == kNoTexel) {
+        atlasOf[t] = uint32_t(a);
+        pixelOf[t] = uint32_t(p);
+      }
+    }
+  }
+  const bool smooth = d.filterPasses > 0;
+  // A texel's mix: its own point (4), and with smoothing its marked neighbours' (tent).
+  auto mixOf = [&](uint32_t t, std::vector<std::pair<uint32_t, float>>& out) {
+    out.emplace_back(d.texelPoint[t], 4.0f);
+    if (!smooth || atlasOf[t] == kNoTexel) return;
+    const AtlasLayout& layout = d.atlases[atlasOf[t]];
+    const int x = int(pixelOf[t] % uint32_t(layout.width)), y = int(pixelOf[t] / uint32_t(layout.width));
+    for (int k = 0; k < 8; ++k) {
+      if (!(d.texelNeighbours[t] & (1u << k))) continue;
+      const int nx = x + kNeighbourOffsets[k][0], ny = y + kNeighbourOffsets[k][1];
+      if (nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height) continue;
+      const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
+      if (n >= count || d.texelPoint[n] == kNoTexel) continue;
+      out.emplace_back(d.texelPoint[n], tentWeight(k));
+    }
+  };
+  std::vector<std::pair<uint32_t, float>> entries;
+  d.texelGather = SparseMatrix();
+  d.texelGather.rowStart.reserve(size_t(count) + 1);
+  for (uint32_t t = 0; t < count; ++t) {
+    entries.clear();
+    if (d.texelPoint[t] != kNoTexel) mixOf(t, entries);
+    appendNormalised(entries, d.texelGather);
+  }
+  // A point takes the mean over its texels of that same mix (the tent applied to the points'
+  // values as the texels see them, averaged back over the point).
+  d.pointFilter = SparseMatrix();
+  if (!smooth) return;
+  std::vector<uint32_t> start(size_t(points) + 1, 0), members;
+  for (uint32_t p : d.texelPoint)
+    if (p != kNoTexel) ++start[p + 1];
+  for (uint32_t p = 0; p < points; ++p) start[p + 1] += start[p];
+  members.resize(start[points]);
+  std::vector<uint32_t> next(start.begin(), start.end() - 1);
+  for (uint32_t t = 0; t < count; ++t)
+    if (d.texelPoint[t] != kNoTexel) members[next[d.texelPoint[t]]++] = t;
+  d.pointFilter.rowStart.reserve(size_t(points) + 1);
+  for (uint32_t p = 0; p < points; ++p) {
+    entries.clear();
+    for (uint32_t k = start[p]; k < start[p + 1]; ++k) {
+      const size_t before = entries.size();
+      mixOf(members[k], entries);
+      // Neighbours inside the point are the point itself: only the centre weight counts for
+      // it, so a block smooths with its neighbours as strongly as a texel does with its own.
+      for (size_t i = before + 1; i < entries.size(); ++i)
+        if (entries[i].first == p) entries[i].second = 0.0f;
+    }
+    appendNormalised(entries, d.pointFilter);
+  }
+}
+
+}  // namespace afterglow::runtime
