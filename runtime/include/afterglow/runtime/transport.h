@@ -31,7 +31,8 @@ constexpr int kNeighbourOffsets[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0},
 // the fraction of a point's cosine-weighted hemisphere that sees the target cluster; codes are
 // relative to the row's largest weight, which takes the largest code (2^w - 1 for w =
 // 32 - targetBits weight bits, at most 16), so each weight is within half a code of that largest:
-// 1/65535 of it when targets fit in 16 bits, 1/16383 with 18 (Sponza's 150k clusters).
+// 1/65535 of it when targets fit in 16 bits, 1/16383 with 18 (Sponza's 230k clusters and far
+// clusters).
 constexpr uint32_t kMinWeightBits = 10;
 constexpr uint32_t kMaxWeightBits = 16;
 constexpr uint32_t kMaxLinkTargets = 1u << (32 - kMinWeightBits);
