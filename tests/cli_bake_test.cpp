@@ -88,10 +88,14 @@ std::pair<double, double> linearMeans(const Picture& a, const Picture& b, double
   return n ? std::make_pair(sumA / double(n), sumB / double(n)) : std::make_pair(0.0, 0.0);
 }
 
-// A draft bake of the Cornell box, shared by the tests below (each bake takes a second).
+// A draft bake of the Cornell box, shared by the tests below that run in one process (each bake
+// takes a second). ctest runs every test in a process of its own and two at a time, so the
+// folder is named for the test that bakes it: one process must not clear another's bake.
 const std::string& bakedCornell() {
   static const std::string out = [] {
-    const std::string dir = tempDir("cli_bake_cornell");
+    const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    const std::string dir =
+        tempDir(std::string("cli_bake_cornell_") + (test ? test->name() : "shared"));
     const std::string o = dir + "/out";
     CliRun r = runCli(dir, "bake builtin:cornell -o '" + o +
                             "' --quality draft --texels-per-unit 48 --quiet");
