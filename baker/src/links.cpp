@@ -85,7 +85,8 @@ class RowBuilder {
 };
 
 // Builds a sparse matrix row by row in parallel: fill(row, state, links) writes a row's links
-// sorted by cluster, with per-block scratch `state` from makeState(); each block of rows
+// sorted by cluster, with per-thread scratch `state` from makeState() (a dense array over the
+// targets: made once a thread, not once a block; fill leaves it as it found it); each block of rows
 // collects its own, and the blocks are joined in row order (so the result does not depend on
 // the thread count, nor the memory on hundreds of thousands of small vectors).
 template <class MakeState, class Fill>
@@ -98,25 +99,28 @@ void buildRows(size_t rows, uint32_t targets, Progress& progress, MakeState&& ma
   };
   std::vector<Block> blocks;
   std::mutex mutex;
-  parallelForBlocks(rows, [&](size_t begin, size_t end, int) {
+  using State = decltype(makeState());
+  std::vector<std::unique_ptr<State>> states(size_t(std::max(1, threadCount())));
+  parallelForBlocks(rows, [&](size_t begin, size_t end, int thread) {
     Block block;
     block.begin = begin;
     block.links = runtime::SparseLinks(targets);
     block.links.rowScale.reserve(end - begin);
-    auto state = makeState();
+    std::unique_ptr<State>& state = states[size_t(thread)];
+    if (!state) state = std::make_unique<State>(makeState());
     std::vector<Link> row;
-    std::vector<uint32_t> targets;
+    std::vector<uint32_t> columns;
     std::vector<float> weights;
     for (size_t r = begin; r < end; ++r) {
       row.clear();
-      if (!progress.cancelled()) fill(r, state, row);
-      targets.clear();
+      if (!progress.cancelled()) fill(r, *state, row);
+      columns.clear();
       weights.clear();
       for (const Link& l : row) {
-        targets.push_back(l.cluster);
+        columns.push_back(l.cluster);
         weights.push_back(l.weight);
       }
-      block.links.appendRow(targets.data(), weights.data(), row.size());
+      block.links.appendRow(columns.data(), weights.data(), row.size());
     }
     progress.advance(end - begin);
     std::lock_guard<std::mutex> lock(mutex);

@@ -41,9 +41,10 @@ void SparseLinks::appendRow(const uint32_t* targets, const float* weights, size_
   const float scale = largest > 0.0f ? largest / top : 0.0f;
   rowScale.push_back(scale);
   for (size_t i = 0; i < n && scale > 0.0f; ++i) {
-    const float q = std::round(weights[i] / scale);
-    if (!(q >= 1.0f)) continue;
-    link.push_back((uint32_t(std::min(q, top)) << targetBits) | targets[i]);
+    // Rounded half up (weights are not negative) without a call to round().
+    const double q = std::floor(double(weights[i] / scale) + 0.5);
+    if (!(q >= 1.0)) continue;
+    link.push_back((uint32_t(std::min(q, double(top))) << targetBits) | targets[i]);
   }
   rowStart.push_back(uint32_t(link.size()));
 }
