@@ -370,6 +370,51 @@ TEST(BakerTransport, BackFacesOfSingleSidedGeometryInvalidateTexels) {
   EXPECT_EQ(invalid, 8);
 }
 
+// Solves a furnace's transport to convergence for albedos 0.5 and 0.9 and expects every texel
+// (every valid one, given `valid`) at the analytic E/π = Le / (1 − ρ) within 1%.
+void expectFurnaceRadiance(runtime::TransportData& data, const std::vector<uint8_t>* valid,
+                           float le = 1.0f) {
+  for (float rho : {0.5f, 0.9f}) {
+    data.materials[0].albedo = glm::vec3(rho);
+    runtime::Solver solver(data);
+    runtime::SolveOptions sopt;
+    sopt.tolerance = 1e-6f;
+    solver.solve(sopt);
+    std::vector<glm::vec3> out;
+    solver.gatherTexels(out);
+    const float expected = le / (1.0f - rho);
+    float worst = 0.0f;
+    for (uint32_t t = 0; t < data.texelCount; ++t)
+      if (!valid || (*valid)[t]) worst = std::max(worst, std::abs(out[t].x - expected) / expected);
+    EXPECT_LT(worst, 0.01f) << "rho " << rho;
+  }
+}
+
+// The procedural furnace box (ρ exactly 0.5, Le 1) unwrapped at 16 texels/m, with its tracer
+// and texels. (The tracer refers to the scene, so the box stays where it was built.)
+struct FurnaceBox {
+  Scene scene;
+  std::unique_ptr<RayTracer> tracer;
+  TexelSet texels;
+};
+
+void buildFurnaceBox(FurnaceBox& box) {
+  scenes::FurnaceOptions fo;
+  fo.albedo = glm::vec3(0.5f);
+  fo.emission = glm::vec3(1.0f);
+  box.scene = scenes::makeFurnaceBox(fo);
+  box.scene.materials[0].roughnessFactor = 0.0f;  // no specular share: ρ is exactly 0.5
+  uv::UnwrapOptions uopt;
+  uopt.pack.texelsPerUnit = 16.0f;
+  ASSERT_TRUE(uv::unwrap(box.scene, uopt).isOk());
+  auto built = RayTracer::build(box.scene);
+  ASSERT_TRUE(built.isOk()) << built.message();
+  box.tracer = std::move(built.value());
+  Result<TexelSet> texels = computeTexels(box.scene, *box.tracer);
+  ASSERT_TRUE(texels.isOk()) << texels.message();
+  box.texels = std::move(texels.value());
+}
+
 // A closed cube of six quads, every surface with albedo ρ and radiance Le: every texel's row
 // sums to 1, no sky, and the solved E/π is Le / (1 − ρ).
 TEST(BakerTransport, WhiteFurnaceConvergesToAnalyticRadiance) {
@@ -408,40 +453,17 @@ TEST(BakerTransport, WhiteFurnaceConvergesToAnalyticRadiance) {
   for (uint32_t c = 0; c < data.clusterCount; ++c)
     EXPECT_NEAR(sum(clusterRow(data, c)), 1.0, 1e-3) << c;
 
-  for (float rho : {0.5f, 0.9f}) {
-    data.materials[0].albedo = glm::vec3(rho);
-    runtime::Solver solver(data);
-    runtime::SolveOptions sopt;
-    sopt.tolerance = 1e-6f;
-    solver.solve(sopt);
-    std::vector<glm::vec3> out;
-    solver.gatherTexels(out);
-    const float expected = le / (1.0f - rho);
-    float worst = 0.0f;
-    for (uint32_t t = 0; t < data.texelCount; ++t) {
-      worst = std::max(worst, std::abs(out[t].x - expected) / expected);
-    }
-    EXPECT_LT(worst, 0.01f) << "rho " << rho;
-  }
+  expectFurnaceRadiance(data, nullptr, le);
 }
 
 // The same furnace through the whole precompute: procedural box, generated UVs, rasterised
 // texels and computed clusters.
 TEST(BakerTransport, WhiteFurnaceThroughTexelsAndClusters) {
-  scenes::FurnaceOptions fo;
-  fo.albedo = glm::vec3(0.5f);
-  fo.emission = glm::vec3(1.0f);
-  Scene scene = scenes::makeFurnaceBox(fo);
-  scene.materials[0].roughnessFactor = 0.0f;  // no specular share: ρ is exactly 0.5
-  uv::UnwrapOptions uopt;
-  uopt.pack.texelsPerUnit = 16.0f;
-  ASSERT_TRUE(uv::unwrap(scene, uopt).isOk());
-  auto built = RayTracer::build(scene);
-  ASSERT_TRUE(built.isOk()) << built.message();
-  const RayTracer& tracer = *built.value();
-  Result<TexelSet> texelResult = computeTexels(scene, tracer);
-  ASSERT_TRUE(texelResult.isOk()) << texelResult.message();
-  TexelSet texels = std::move(texelResult.value());
+  FurnaceBox box;
+  ASSERT_NO_FATAL_FAILURE(buildFurnaceBox(box));
+  const Scene& scene = box.scene;
+  const RayTracer& tracer = *box.tracer;
+  TexelSet& texels = box.texels;
   const Clusters clusters = computeClusters(scene, &tracer, texels);
   ASSERT_GT(texels.size(), 1000u);
   LinkOptions lopt;
@@ -462,40 +484,18 @@ TEST(BakerTransport, WhiteFurnaceThroughTexelsAndClusters) {
     EXPECT_NEAR(rowSum(data.links, pointOf[t]), 1.0f, 2e-3f) << t;
   }
   EXPECT_GT(valid, 0.95 * data.texelCount);
-  for (float rho : {0.5f, 0.9f}) {
-    data.materials[0].albedo = glm::vec3(rho);
-    runtime::Solver solver(data);
-    runtime::SolveOptions sopt;
-    sopt.tolerance = 1e-6f;
-    solver.solve(sopt);
-    std::vector<glm::vec3> out;
-    solver.gatherTexels(out);
-    const float expected = 1.0f / (1.0f - rho);
-    float worst = 0.0f;
-    for (uint32_t t = 0; t < data.texelCount; ++t)
-      if (texels.valid[t]) worst = std::max(worst, std::abs(out[t].x - expected) / expected);
-    EXPECT_LT(worst, 0.01f) << "rho " << rho;
-  }
+  expectFurnaceRadiance(data, &box.texels.valid);
 }
 
 // Far clusters keep the furnace exact: a far hit's weight moves whole to the far cluster, whose
 // light is its clusters' area-weighted mean, so rows keep their sums and the furnace its
 // analytic radiance; and they make fewer links than the same gather without them.
 TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
-  scenes::FurnaceOptions fo;
-  fo.albedo = glm::vec3(0.5f);
-  fo.emission = glm::vec3(1.0f);
-  Scene scene = scenes::makeFurnaceBox(fo);
-  scene.materials[0].roughnessFactor = 0.0f;
-  uv::UnwrapOptions uopt;
-  uopt.pack.texelsPerUnit = 16.0f;
-  ASSERT_TRUE(uv::unwrap(scene, uopt).isOk());
-  auto built = RayTracer::build(scene);
-  ASSERT_TRUE(built.isOk()) << built.message();
-  const RayTracer& tracer = *built.value();
-  Result<TexelSet> texelResult = computeTexels(scene, tracer);
-  ASSERT_TRUE(texelResult.isOk()) << texelResult.message();
-  TexelSet texels = std::move(texelResult.value());
+  FurnaceBox box;
+  ASSERT_NO_FATAL_FAILURE(buildFurnaceBox(box));
+  const Scene& scene = box.scene;
+  const RayTracer& tracer = *box.tracer;
+  TexelSet& texels = box.texels;
   ClusterOptions copt;
   const Clusters clusters = computeClusters(scene, &tracer, texels, nullptr, copt);
   const std::vector<Clusters> far = {
@@ -527,20 +527,7 @@ TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
   DirectOptions dopt;
   dopt.emissiveSamples = 2048;
   ASSERT_TRUE(computeDirect(scene, tracer, texels, clusters, dopt, data).isOk());
-  for (float rho : {0.5f, 0.9f}) {
-    data.materials[0].albedo = glm::vec3(rho);
-    runtime::Solver solver(data);
-    runtime::SolveOptions sopt;
-    sopt.tolerance = 1e-6f;
-    solver.solve(sopt);
-    std::vector<glm::vec3> out;
-    solver.gatherTexels(out);
-    const float expected = 1.0f / (1.0f - rho);
-    float worst = 0.0f;
-    for (uint32_t t = 0; t < data.texelCount; ++t)
-      if (texels.valid[t]) worst = std::max(worst, std::abs(out[t].x - expected) / expected);
-    EXPECT_LT(worst, 0.01f) << "rho " << rho;
-  }
+  expectFurnaceRadiance(data, &box.texels.valid);
 }
 
 // The Cornell box's ceiling light seen from a floor point: the explicit area-light

@@ -257,27 +257,6 @@ std::vector<uint8_t> markFilterNeighbours(const RayTracer& tracer, const TexelSe
   return marks;
 }
 
-// Sorts (column, weight) pairs by column, sums duplicates and scales the row to sum to one.
-void appendNormalised(std::vector<std::pair<uint32_t, float>>& entries, runtime::SparseMatrix& m) {
-  std::sort(entries.begin(), entries.end());
-  // Reused between calls: the maps have a row per texel, two allocations each added up.
-  thread_local std::vector<uint32_t> columns;
-  thread_local std::vector<float> weights;
-  columns.clear();
-  weights.clear();
-  double total = 0.0;
-  for (const auto& e : entries) total += double(e.second);
-  for (size_t i = 0; i < entries.size();) {
-    size_t j = i;
-    double w = 0.0;
-    while (j < entries.size() && entries[j].first == entries[i].first) w += double(entries[j++].second);
-    columns.push_back(entries[i].first);
-    weights.push_back(total > 0.0 ? float(w / total) : 0.0f);
-    i = j;
-  }
-  m.appendRow(columns.data(), weights.data(), columns.size());
-}
-
 // Far clusters as link targets: per level and texel, its far cluster (front sides only,
 // numbered from 0 across the levels), and per far cluster the squared distance beyond which a
 // hit links it.
@@ -323,7 +302,7 @@ FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
       }
       const float reach = farDistance * radius;
       out.reach2.push_back(reach * reach);
-      appendNormalised(entries, transport.farClusters);
+      transport.farClusters.appendNormalisedRow(entries);
     }
   }
   return out;
@@ -502,7 +481,7 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
       for (int i = 0; i < kShCount; ++i)
         transport.clusterSky[size_t(c) * kShCount + size_t(i)] = runtime::floatToHalf(float(sky[i]));
     }
-    appendNormalised(entries, transport.clusterGather);
+    transport.clusterGather.appendNormalisedRow(entries);
   }
   // How texels read the gather points and how the points smooth each other, built by the
   // runtime from what the transport file stores (so a loaded file has the very same maps).

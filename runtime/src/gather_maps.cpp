@@ -13,25 +13,9 @@ namespace afterglow::runtime {
 namespace {
 
 // The tent over a texel's marked neighbours: 4 for itself, 2 along the axes, 1 on diagonals.
+// (Small integers: a row's sums, SparseMatrix::appendNormalisedRow, are exact in any order.)
 float tentWeight(int k) {
   return (kNeighbourOffsets[k][0] == 0 || kNeighbourOffsets[k][1] == 0) ? 2.0f : 1.0f;
-}
-
-// Sorts (column, weight) pairs by column, sums duplicates and scales the row to sum to one.
-// The weights are small integers, so the sums are exact in any order.
-void appendNormalised(std::vector<std::pair<uint32_t, float>>& entries, SparseMatrix& m) {
-  std::sort(entries.begin(), entries.end());
-  double total = 0.0;
-  for (const auto& e : entries) total += double(e.second);
-  for (size_t i = 0; i < entries.size();) {
-    size_t j = i;
-    double w = 0.0;
-    while (j < entries.size() && entries[j].first == entries[i].first) w += double(entries[j++].second);
-    m.column.push_back(entries[i].first);
-    m.weight.push_back(total > 0.0 ? float(w / total) : 0.0f);
-    i = j;
-  }
-  m.rowStart.push_back(uint32_t(m.column.size()));
 }
 
 }  // namespace
@@ -91,7 +75,7 @@ void buildGatherMaps(TransportData& d) {
   for (uint32_t t = 0; t < count; ++t) {
     entries.clear();
     if (d.texelPoint[t] != kNoTexel) mixOf(t, entries);
-    appendNormalised(entries, d.texelGather);
+    d.texelGather.appendNormalisedRow(entries);
   }
   // A point takes the mean over its texels of that same mix (the tent applied to the points'
   // values as the texels see them, averaged back over the point).
@@ -116,7 +100,7 @@ void buildGatherMaps(TransportData& d) {
       for (size_t i = before + 1; i < entries.size(); ++i)
         if (entries[i].first == p) entries[i].second = 0.0f;
     }
-    appendNormalised(entries, d.pointFilter);
+    d.pointFilter.appendNormalisedRow(entries);
   }
 }
 

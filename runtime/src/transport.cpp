@@ -28,6 +28,21 @@ void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texel
   }
 }
 
+void SparseMatrix::appendNormalisedRow(std::vector<std::pair<uint32_t, float>>& entries) {
+  std::sort(entries.begin(), entries.end());
+  double total = 0.0;
+  for (const auto& e : entries) total += double(e.second);
+  for (size_t i = 0; i < entries.size();) {
+    size_t j = i;
+    double w = 0.0;
+    while (j < entries.size() && entries[j].first == entries[i].first) w += double(entries[j++].second);
+    column.push_back(entries[i].first);
+    weight.push_back(total > 0.0 ? float(w / total) : 0.0f);
+    i = j;
+  }
+  rowStart.push_back(uint32_t(column.size()));
+}
+
 uint32_t SparseLinks::bitsFor(uint32_t targets) {
   uint32_t bits = 1;
   while (bits < 32 && (uint64_t(1) << bits) < uint64_t(targets)) ++bits;

@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -80,6 +81,9 @@ struct SparseMatrix {
     weight.insert(weight.end(), weights, weights + n);
     rowStart.push_back(uint32_t(column.size()));
   }
+  // Appends a row of (column, weight) pairs in any order: sorts them (`entries` is left
+  // sorted), sums a column's weights (in double) and scales the row to sum to one.
+  void appendNormalisedRow(std::vector<std::pair<uint32_t, float>>& entries);
 };
 
 // A source of direct light whose unit transfer was precomputed: a punctual light, or all the
