@@ -394,10 +394,10 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
       const uint32_t firstHit = gather.hitStart[t], n = gather.hitStart[t + 1] - firstHit;
       for (uint32_t i = 0; i < n; ++i) {
         const uint32_t code = gather.hits[firstHit + i];
+        const bool inNearField = !(code & TexelGather::kFar);
+        if (!inNearField && i >= gather.fullRays[t]) continue;  // counted by the full rays
         const uint32_t c = targetOf(code, t);
-        if (c == kNoTexel) continue;
-        if (!(code & TexelGather::kFar)) row.add(c, nearWeight);
-        else if (i < gather.fullRays[t]) row.add(c, farWeight);
+        if (c != kNoTexel) row.add(c, inNearField ? nearWeight : farWeight);
       }
     }
   };
