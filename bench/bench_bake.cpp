@@ -134,7 +134,7 @@ int benchAccuracy(int argc, char** argv) {
               "%u clusters, %zu links\n",
               b.texels.atlases[0].width, b.texels.atlases[0].height,
               double(unwrapOptions.pack.texelsPerUnit), b.texels.size(), valid,
-              b.transport.gatherPointCount, b.clusters.size(), b.transport.links.size());
+              b.transport.gatherPointCount, b.clusters.size(), b.transport.linkCount());
   std::printf("bake         %.3f s (", bakeSeconds);
   for (const baker::StageTime& s : b.stages) std::printf(" %s %.3f", s.name.c_str(), s.seconds);
   std::printf(" )\n");

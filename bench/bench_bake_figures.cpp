@@ -172,7 +172,7 @@ int cornell(int threads, bool quick) {
               "%u clusters, %zu links\n",
               b.texels.atlases[0].width, b.texels.atlases[0].height, double(tpu.value()),
               b.texels.size(), valid, b.transport.gatherPointCount, b.clusters.size(),
-              b.transport.links.size());
+              b.transport.linkCount());
   std::printf("  default bake %.3f s (best of 3, %d threads)   target <= 0.5 s: %s\n   ", best,
               threads, mark(best <= 0.5));
   printStages(b);
@@ -252,7 +252,7 @@ int sponza(int threads) {
   printStages(b);
   std::printf("\n  texels       %u (%zu valid), %u gather points, %u clusters, %zu links\n",
               b.texels.size(), valid, b.transport.gatherPointCount, b.clusters.size(),
-              b.transport.links.size());
+              b.transport.linkCount());
   std::printf("  peak memory  %.2f GB (whole process)   target <= 4 GB: %s\n", peak,
               mark(peak <= 4.0));
   compareThroughput(scene, b, bestPrecompute);

@@ -62,7 +62,7 @@ int measure(const char* label, scenes::Scene scene, float texelsPerUnit, int atl
   if (!runtime::saveTransport(baked->transport, path, &error)) return fail(error);
   const runtime::TransportData& t = baked->transport;
   const uint32_t texels = t.texelCount, clusters = t.clusterCount, points = t.gatherPointCount;
-  const size_t links = t.links.size();
+  const size_t links = t.linkCount(), sharedLinks = t.sharedFar.size(), shared = t.sharedFar.rows();
   baked = Status::error("released");  // the runtime's memory below is its own
 
   std::error_code ec;
@@ -95,8 +95,9 @@ int measure(const char* label, scenes::Scene scene, float texelsPerUnit, int atl
   const double fullMs = bestMs(std::max(1, repeat / 4), [&] { stats = rt->update(full); });
 
   std::printf("%s\n", label);
-  std::printf("  texels       %u, %u gather points, %u clusters, %zu links\n", texels, points,
-              clusters, links);
+  std::printf("  texels       %u, %u gather points, %u clusters, %zu links (%zu of them in %zu "
+              "shared far fields)\n",
+              texels, points, clusters, links, sharedLinks, shared);
   std::printf("  transport    %.1f MB, %.0f bytes a texel   target <= 200: %s\n", fileBytes / 1e6,
               fileBytes / double(texels), mark(fileBytes / double(texels) <= 200.0));
   std::printf("  load         %.1f ms, %.1f MB of transport in memory\n", loadMs, heldBytes / 1e6);

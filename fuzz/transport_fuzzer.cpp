@@ -58,6 +58,17 @@ void touch(const TransportData& t) {
       if (t.links.targetAt(k) >= t.linkTargetCount()) fail("links");
       seen[t.links.targetAt(k)] += t.links.weightAt(r, k);
     }
+  // The shared far fields gather clusters and far clusters only (the solver writes their
+  // light after those: a shared field of shared fields would read a stale value).
+  const SparseLinks& shared = t.sharedFar;
+  if (shared.rowStart.size() != shared.rows() + 1 || shared.rowStart.back() != shared.size() ||
+      shared.rowScale.size() != shared.rows())
+    fail("shared far fields offsets");
+  for (size_t r = 0; r < shared.rows(); ++r)
+    for (uint32_t k = shared.rowStart[r]; k < shared.rowStart[r + 1]; ++k) {
+      if (shared.targetAt(k) >= t.sharedFarBase()) fail("shared far fields");
+      seen[shared.targetAt(k)] += shared.weightAt(r, k);
+    }
   walk(t.clusterGather.rowStart, t.clusterGather.column, t.clusterGather.weight, rows,
        "cluster gather");
   if (t.clusterGather.rows() != t.clusterCount) fail("cluster gather rows");

@@ -504,6 +504,7 @@ TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
   LinkOptions lopt;
   lopt.texelRays = 256;
   lopt.farDistance = 1.0f;  // far targets for most hits across the box
+  lopt.sharedFarSpan = 0;   // (shared far fields: the next test)
   runtime::TransportData plain, data;
   std::vector<uint32_t> pointOf;
   ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, lopt, plain).isOk());
@@ -523,6 +524,61 @@ TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
     if (!texels.valid[t]) continue;
     EXPECT_NEAR(rowSum(data.links, pointOf[t]), 1.0f, 2e-3f) << t;
   }
+
+  DirectOptions dopt;
+  dopt.emissiveSamples = 2048;
+  ASSERT_TRUE(computeDirect(scene, tracer, texels, clusters, dopt, data).isOk());
+  expectFurnaceRadiance(data, &box.texels.valid);
+}
+
+// Shared far fields move light, never make or lose it: a point that shares one links it with
+// exactly the weight its own far-cluster links had (so its row sum, its visibility, stays its
+// own), a shared row sums to 1, and the furnace stays exact; with fewer links than without.
+TEST(BakerTransport, SharedFarFieldsKeepEachPointsFarShareAndTheFurnace) {
+  FurnaceBox box;
+  ASSERT_NO_FATAL_FAILURE(buildFurnaceBox(box));
+  const Scene& scene = box.scene;
+  const RayTracer& tracer = *box.tracer;
+  TexelSet& texels = box.texels;
+  ClusterOptions copt;
+  const Clusters clusters = computeClusters(scene, &tracer, texels, nullptr, copt);
+  const std::vector<Clusters> far = {
+      computeClusters(scene, &tracer, texels, nullptr, farClusterOptions(copt, 1))};
+  LinkOptions lopt;
+  lopt.texelRays = 256;
+  lopt.farDistance = 1.0f;
+  lopt.blockDistance = 1e6f;  // every texel gathers alone, as near other geometry
+  lopt.sharedFarSpan = 0;
+  runtime::TransportData own, data;
+  std::vector<uint32_t> pointOf;
+  ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, lopt, own, &pointOf, far).isOk());
+  lopt.sharedFarSpan = 4;
+  ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, lopt, data, nullptr, far).isOk());
+  ASSERT_EQ(own.sharedFar.rows(), 0u);
+  ASSERT_GT(data.sharedFar.rows(), 0u);
+  EXPECT_LT(double(data.linkCount()), 0.9 * double(own.linkCount()));
+  const uint32_t base = data.sharedFarBase();
+  ASSERT_EQ(data.linkTargetCount(), base + data.sharedFar.rows());
+  for (uint32_t s = 0; s < data.sharedFar.rows(); ++s) {
+    if (data.sharedFar.rowStart[s] == data.sharedFar.rowStart[s + 1]) continue;
+    EXPECT_NEAR(rowSum(data.sharedFar, s), 1.0f, 1e-5f) << "shared far field " << s;
+    for (uint32_t k = data.sharedFar.rowStart[s]; k < data.sharedFar.rowStart[s + 1]; ++k) {
+      EXPECT_GE(data.sharedFar.targetAt(k), data.clusterCount);  // far clusters only
+      EXPECT_LT(data.sharedFar.targetAt(k), base);
+    }
+  }
+  size_t sharing = 0;
+  for (uint32_t p = 0; p < data.gatherPointCount; ++p) {
+    double ownFar = 0.0, linked = 0.0;
+    for (uint32_t k = own.links.rowStart[p]; k < own.links.rowStart[p + 1]; ++k)
+      if (own.links.targetAt(k) >= own.clusterCount) ownFar += own.links.weightAt(p, k);
+    for (uint32_t k = data.links.rowStart[p]; k < data.links.rowStart[p + 1]; ++k)
+      if (data.links.targetAt(k) >= base) linked += data.links.weightAt(p, k), ++sharing;
+    if (linked == 0.0) continue;
+    EXPECT_NEAR(linked, ownFar, 2e-3 * ownFar + 1e-6) << "point " << p;
+    EXPECT_NEAR(rowSum(data.links, p), rowSum(own.links, p), 1e-4f) << "point " << p;
+  }
+  EXPECT_GT(sharing, size_t(data.gatherPointCount) / 2);
 
   DirectOptions dopt;
   dopt.emissiveSamples = 2048;

@@ -61,6 +61,9 @@ const char kBakeHelp[] =
     "  --cluster-texels N       largest cluster edge in texels (default 4; 0: no limit)\n"
     "  --far-distance X         rays hitting a far cluster (4x a cluster's size) from beyond X\n"
     "                           of its radii link to it, not their cluster (default 2; 0: off)\n"
+    "  --shared-far-span N      texels near other geometry within N texels on one surface pool\n"
+    "                           their far-cluster rays into one shared row (default 4; 0: off)\n"
+    "  --shared-far-points X    rays a shared far row keeps, in gather points' rays (default 2)\n"
     "  --dilation N             texels each chart is grown into its padding (default 2)\n"
     "  --reference              compute every texel with the reference path tracer instead\n"
     "                           (slow; for validating bakes: same outputs, no clusters)\n"
@@ -90,7 +93,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"light-samples"},     {"emissive-samples"}, {"bounces"},
     {"indirect-intensity"}, {"albedo-boost"},    {"sky"},
     {"sky-image"},         {"cluster-size"},    {"cluster-texels"},
-    {"far-distance"},      {"dilation"},
+    {"far-distance"},      {"shared-far-span"},  {"shared-far-points"}, {"dilation"},
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
@@ -241,6 +244,10 @@ int runBake(int argc, char** argv, int first) {
                      &options.clusters.clusterTexels) ||
       !args.getFloat("far-distance", options.links.farDistance, 0.0f, 1e6f,
                      &options.links.farDistance) ||
+      !args.getInt("shared-far-span", options.links.sharedFarSpan, 0, 1024,
+                   &options.links.sharedFarSpan) ||
+      !args.getFloat("shared-far-points", options.links.sharedFarPoints, 0.0f, 1e6f,
+                     &options.links.sharedFarPoints) ||
       !args.getInt("dilation", 2, 0, 64, &options.dilation) ||
       !args.getInt("threads", 0, 0, 1024, &threads) ||
       !args.getInt("spp", 1024, 1, 1 << 24, &options.referenceOptions.samples) ||
@@ -387,7 +394,7 @@ int runBake(int argc, char** argv, int first) {
     for (uint8_t v : r.texels.valid) valid += v ? 1 : 0;
     std::printf("texels        %u (%zu valid), gather points %u, clusters %u, links %zu\n",
                 r.texels.size(), valid, r.transport.gatherPointCount, r.clusters.size(),
-                r.transport.links.size());
+                r.transport.linkCount());
     std::printf("rays          %llu\n", static_cast<unsigned long long>(r.raysTraced));
     std::printf("time         ");
     for (const baker::StageTime& s : info.extraStages) std::printf(" %s %.2f s,", s.name.c_str(), s.seconds);

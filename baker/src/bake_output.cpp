@@ -281,7 +281,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   report["validTexels"] = valid;
   report["clusters"] = result.clusters.size();
   report["gatherPoints"] = result.transport.gatherPointCount;
-  report["links"] = result.transport.links.size();
+  report["links"] = result.transport.linkCount();
   report["sources"] = {{"lights", lights}, {"emissiveMaterials", emissive}};
   report["raysTraced"] = result.raysTraced;
   report["transport"] = transportInfo;

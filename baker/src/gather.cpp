@@ -47,16 +47,6 @@ uint32_t validNeighbour(const TexelSet& texels, uint32_t t) {
   return best;
 }
 
-// Two texels that may share a gather point: same instance, normals within 30°, on one plane.
-bool sameSurface(const TexelSet& texels, uint32_t a, uint32_t b) {
-  if (texels.instance[a] != texels.instance[b]) return false;
-  if (glm::dot(texels.normal[a], texels.normal[b]) < 0.866f) return false;
-  const glm::vec3 d = texels.position[b] - texels.position[a];
-  const float distance = glm::length(d);
-  return std::abs(glm::dot(texels.geometricNormal[a], d)) <= 0.2f * distance &&
-         std::abs(glm::dot(texels.geometricNormal[b], d)) <= 0.2f * distance;
-}
-
 // Groups the valid texels into 2×2 atlas blocks on one surface; texels near other geometry
 // (TexelSet::nearGeometry) stay alone. Returns per texel its group, numbered in atlas scan
 // order, and the group sizes.

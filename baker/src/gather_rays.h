@@ -2,6 +2,7 @@
 // back-side clusters' rays (links.cpp), so both classify hits the same way.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -16,6 +17,18 @@
 #include "sampling.h"
 
 namespace afterglow::baker {
+
+// Two texels on one surface: same instance, normals within 30°, neither above the other's
+// plane by more than a fifth of their distance (so neither a step nor a fold lies between
+// them). Texels that may share a gather point, a far field, or smooth each other's light.
+inline bool sameSurface(const TexelSet& texels, uint32_t a, uint32_t b) {
+  if (texels.instance[a] != texels.instance[b]) return false;
+  if (glm::dot(texels.normal[a], texels.normal[b]) < 0.866f) return false;
+  const glm::vec3 d = texels.position[b] - texels.position[a];
+  const float distance = glm::length(d);
+  return std::abs(glm::dot(texels.geometricNormal[a], d)) <= 0.2f * distance &&
+         std::abs(glm::dot(texels.geometricNormal[b], d)) <= 0.2f * distance;
+}
 
 // texelAtUv as one table lookup per hit (the gather's hottest path after Embree): for every
 // atlas pixel, its texel when valid, else the valid texel of the same instance among its 8

@@ -190,6 +190,22 @@ void fillMaterials(const scenes::Scene& scene, const Clusters& clusters,
   }
 }
 
+// The sight line between the samples of texels a and b on one surface, each lifted off it by a
+// quarter of their distance (so the surface itself does not block it), traced from the lower
+// index so that it is symmetric; false when they coincide (nothing can stand between them).
+bool sightLine(const TexelSet& texels, uint32_t a, uint32_t b, Ray& sight) {
+  const uint32_t from = std::min(a, b), to = std::max(a, b);
+  const float lift = 0.25f * glm::length(texels.position[to] - texels.position[from]);
+  const glm::vec3 p = texels.position[from] + texels.normal[from] * lift;
+  const glm::vec3 q = texels.position[to] + texels.normal[to] * lift;
+  const float length = glm::length(q - p);
+  if (!(length > 0.0f)) return false;
+  sight.origin = p;
+  sight.direction = (q - p) / length;
+  sight.tfar = length;
+  return true;
+}
+
 // Marks, per texel, the atlas neighbours whose bounced light may smooth its own: valid, same
 // instance, same plane (normals within 30°, no step between them), closer than filterReach ×
 // the harmonic ray distance of both, and in sight of each other (a wall standing on the floor
@@ -199,31 +215,16 @@ void fillMaterials(const scenes::Scene& scene, const Clusters& clusters,
 std::vector<uint8_t> markFilterNeighbours(const RayTracer& tracer, const TexelSet& texels,
                                           const TexelGather& gather, const LinkOptions& options) {
   std::vector<uint8_t> marks(texels.size(), 0);
-  const float minCos = std::cos(30.0f * kPi / 180.0f);
   // Whether a and b may smooth each other: kNo, kYes, or kInSight when the sight line `sight`
   // between them is clear.
   enum Compatible { kNo, kYes, kInSight };
   auto compatible = [&](uint32_t a, uint32_t b, Ray& sight) {
-    if (!texels.valid[b] || texels.instance[a] != texels.instance[b]) return kNo;
-    if (glm::dot(texels.normal[a], texels.normal[b]) < minCos) return kNo;
-    const glm::vec3 d = texels.position[b] - texels.position[a];
-    const float distance = glm::length(d);
-    if (std::abs(glm::dot(texels.geometricNormal[a], d)) > 0.2f * distance ||
-        std::abs(glm::dot(texels.geometricNormal[b], d)) > 0.2f * distance)
-      return kNo;
+    if (!texels.valid[b] || !sameSurface(texels, a, b)) return kNo;
+    const float distance = glm::length(texels.position[b] - texels.position[a]);
     const float reach = options.filterReach *
                         std::min(gather.harmonicDistance[a], gather.harmonicDistance[b]);
     if (!(distance < reach)) return kNo;
-    const uint32_t from = std::min(a, b), to = std::max(a, b);
-    const float lift = 0.25f * distance;
-    const glm::vec3 p = texels.position[from] + texels.normal[from] * lift;
-    const glm::vec3 q = texels.position[to] + texels.normal[to] * lift;
-    const float length = glm::length(q - p);
-    if (!(length > 0.0f)) return kYes;
-    sight.origin = p;
-    sight.direction = (q - p) / length;
-    sight.tfar = length;
-    return kInSight;
+    return sightLine(texels, a, b, sight) ? kInSight : kYes;
   };
   // A block's sight lines are traced together (a coherent stream, RayTracer::occluded).
   parallelForBlocks(texels.size(), [&](size_t begin, size_t end, int) {
@@ -308,6 +309,93 @@ FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
   return out;
 }
 
+// Gather points that share a far field (LinkOptions::sharedFarSpan): points of one texel in
+// one span × span square of an atlas, on one surface and in sight of each other. In rounds: in
+// every square the first point without a group anchors one, and the square's other points
+// without one join it when they share its surface and see it (the sight lines of a round
+// traced together); the rest try again next round. Per point its group, numbered in the order
+// of their anchors, or kNoTexel for a point alone in its group (its row keeps its far links:
+// sharing would only add one) and for points of several texels (a 2×2 block's rays are pooled
+// already, and its far field smoothed with its neighbours': sharing it over a wider square
+// measurably blurs corners). Deterministic: the rounds do not depend on threads.
+struct FarGroups {
+  std::vector<uint32_t> ofPoint;
+  std::vector<uint32_t> start{0};  // group g's points: points[start[g] .. start[g+1])
+  std::vector<uint32_t> points;
+  uint32_t size() const { return uint32_t(start.size() - 1); }
+};
+
+FarGroups shareFarFields(const RayTracer& tracer, const TexelSet& texels,
+                         const TexelGather& gather, int span) {
+  const uint32_t points = gather.points();
+  FarGroups out;
+  out.ofPoint.assign(points, kNoTexel);
+  if (span <= 1) return out;
+  auto firstTexel = [&](uint32_t p) { return gather.pointTexels[gather.pointStart[p]]; };
+  // (square, point) for the points of one texel, sorted: each square's points in a run.
+  std::vector<std::pair<uint64_t, uint32_t>> order;
+  for (uint32_t p = 0; p < points; ++p) {
+    if (gather.pointStart[p + 1] - gather.pointStart[p] != 1) continue;
+    const uint32_t t = firstTexel(p);
+    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+    const uint64_t columns = uint64_t(layout.width + span - 1) / uint64_t(span);
+    const uint64_t square = uint64_t(texels.pixel[t].y / span) * columns +
+                            uint64_t(texels.pixel[t].x / span);
+    order.push_back({(uint64_t(texels.atlas[t]) << 40) | square, p});
+  }
+  std::sort(order.begin(), order.end());
+  std::vector<uint32_t> anchor(points, kNoTexel);  // per point, its group's anchor point
+  std::vector<Ray> sights;
+  std::vector<std::pair<uint32_t, uint32_t>> joins;  // per sight line: point, anchor
+  for (bool open = true; open;) {
+    open = false;
+    sights.clear();
+    joins.clear();
+    for (size_t i = 0, j; i < order.size(); i = j) {
+      for (j = i + 1; j < order.size() && order[j].first == order[i].first;) ++j;
+      uint32_t a = kNoTexel;
+      for (size_t k = i; k < j; ++k) {
+        const uint32_t p = order[k].second;
+        if (anchor[p] != kNoTexel) continue;
+        if (a == kNoTexel) {
+          anchor[p] = a = p;
+          open = true;
+          continue;
+        }
+        if (!sameSurface(texels, firstTexel(a), firstTexel(p))) continue;
+        if (!sightLine(texels, firstTexel(a), firstTexel(p), sights.emplace_back())) {
+          sights.pop_back();
+          anchor[p] = a;
+          continue;
+        }
+        joins.push_back({p, a});
+      }
+    }
+    std::unique_ptr<bool[]> blocked(new bool[sights.size()]);
+    tracer.occluded(sights.data(), blocked.get(), sights.size());
+    for (size_t k = 0; k < joins.size(); ++k)
+      if (!blocked[k]) anchor[joins[k].first] = joins[k].second;
+  }
+  std::vector<uint32_t> members(points, 0);
+  for (uint32_t p = 0; p < points; ++p)
+    if (anchor[p] != kNoTexel) ++members[anchor[p]];
+  std::vector<uint32_t> groupOfAnchor(points, kNoTexel);
+  for (uint32_t p = 0; p < points; ++p)
+    if (anchor[p] == p && members[p] > 1) {
+      groupOfAnchor[p] = out.size();
+      out.start.push_back(out.start.back() + members[p]);
+    }
+  out.points.resize(out.start.back());
+  std::vector<uint32_t> fill(out.start.begin(), out.start.end() - 1);
+  for (uint32_t p = 0; p < points; ++p) {
+    if (anchor[p] == kNoTexel) continue;
+    const uint32_t g = groupOfAnchor[anchor[p]];
+    out.ofPoint[p] = g;
+    if (g != kNoTexel) out.points[fill[g]++] = p;
+  }
+  return out;
+}
+
 }  // namespace
 
 Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const TexelSet& texels,
@@ -346,12 +434,16 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
   };
   const FarTargets far = farTargets(texels, clusters, farLevels, options.farDistance, transport);
-  const uint32_t targetCount = transport.linkTargetCount();
+  // (Without far clusters there is no far field to share.)
+  const FarGroups groups =
+      shareFarFields(tracer, texels, gather, far.reach2.empty() ? 0 : options.sharedFarSpan);
+  const uint32_t sharedBase = transport.sharedFarBase();
+  const uint64_t targetCount = uint64_t(sharedBase) + groups.size();
   if (targetCount > runtime::kMaxLinkTargets)
     return Status::error(format(
-        "%u clusters and far clusters, more than the transport's links can address (%u): raise "
-        "--cluster-size or --cluster-texels, or lower --texels-per-unit",
-        targetCount, runtime::kMaxLinkTargets));
+        "%llu clusters, far clusters and shared far fields, more than the transport's links can "
+        "address (%u): raise --cluster-size or --cluster-texels, or lower --texels-per-unit",
+        (unsigned long long)targetCount, runtime::kMaxLinkTargets));
   // What a gather point's ray from texel `from` links to: the coarsest far cluster of a front
   // hit seen from far enough, else the hit's cluster.
   auto targetOf = [&](uint32_t code, uint32_t from) -> uint32_t {
@@ -366,11 +458,11 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   for (uint32_t c = 0; c < clusterCount; ++c)
     if (clusters.back[c] && clusters.firstTexel[c] < clusters.firstTexel[c + 1]) backClusters.push_back(c);
 
-  // A gather point's row: its texels' rays pooled. Hits in the near field count over all the
-  // point's rays; hits beyond it were kept from the full sets only, and share what the near
-  // hits and the misses leave (a ratio estimate), so every row plus its misses sums to exactly
-  // 1 and a closed room neither gains nor loses light.
-  auto pointRow = [&](uint32_t p, RowBuilder& row) {
+  // A gather point's rays pooled, visit(target, weight) per hit. Hits in the near field count
+  // over all the point's rays; hits beyond it were kept from the full sets only, and share
+  // what the near hits and the misses leave (a ratio estimate), so every row plus its misses
+  // sums to exactly 1 and a closed room neither gains nor loses light.
+  auto pointHits = [&](uint32_t p, auto&& visit) {
     uint32_t all = 0, near = 0, misses = 0, farFull = 0;
     for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
       const uint32_t t = gather.pointTexels[k];
@@ -397,8 +489,38 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
         const bool inNearField = !(code & TexelGather::kFar);
         if (!inNearField && i >= gather.fullRays[t]) continue;  // counted by the full rays
         const uint32_t c = targetOf(code, t);
-        if (c != kNoTexel) row.add(c, inNearField ? nearWeight : farWeight);
+        if (c != kNoTexel) visit(c, inNearField ? nearWeight : farWeight, i);
       }
+    }
+  };
+  // A point's row: its hits, except that a point sharing a far field links that field with
+  // the weight of its own hits on far clusters instead of linking them one by one.
+  auto pointRow = [&](uint32_t p, RowBuilder& row) {
+    const uint32_t group = groups.ofPoint[p];
+    double shared = 0.0;
+    pointHits(p, [&](uint32_t c, double w, uint32_t) {
+      if (group != kNoTexel && c >= clusterCount) shared += w;
+      else row.add(c, w);
+    });
+    if (shared > 0.0) row.add(sharedBase + group, shared);
+  };
+  // A shared far field: its points' hits on far clusters, as they weigh in their own rows
+  // (each point's rays count alike), thinned to about sharedFarPoints × texelRays rays: a
+  // point keeps the rays whose index modulo the stride is its rank in the group, so the
+  // group's points together keep each cell of the stratified hemisphere once (a point's full
+  // set walks the cells in order). Normalised where it is built.
+  const uint64_t sharedRays = uint64_t(std::max(1.0f, options.sharedFarPoints * float(rays)));
+  auto sharedRow = [&](uint32_t g, RowBuilder& row) {
+    const uint32_t first = groups.start[g], m = groups.start[g + 1] - first;
+    uint64_t pooled = 0;
+    for (uint32_t k = first; k < first + m; ++k)
+      pooled += gather.fullRays[gather.pointTexels[gather.pointStart[groups.points[k]]]];
+    const uint32_t stride = uint32_t(std::clamp<uint64_t>(pooled / sharedRays, 1, m));
+    for (uint32_t k = first; k < first + m; ++k) {
+      const uint32_t rank = (k - first) % stride;
+      pointHits(groups.points[k], [&](uint32_t c, double w, uint32_t ray) {
+        if (c >= clusterCount && ray % stride == rank) row.add(c, w);
+      });
     }
   };
   // A back cluster: rays of its own from behind its texels, as many as they would cast from the
@@ -434,9 +556,19 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
           runtime::floatToHalf(float(seen.sky[i] * weight));
   };
   const size_t rowCount = size_t(points) + backClusters.size();
-  progress.begin("form factors", rowCount);
+  progress.begin("form factors", groups.size() + rowCount);
   buildRows(
-      rowCount, targetCount, progress, [&] { return RowBuilder(targetCount); },
+      groups.size(), sharedBase, progress, [&] { return RowBuilder(sharedBase); },
+      [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
+        sharedRow(uint32_t(r), row);
+        row.finish(options.minWeight, links);
+        double sum = 0.0;
+        for (const Link& l : links) sum += double(l.weight);
+        for (Link& l : links) l.weight = float(double(l.weight) / sum);
+      },
+      transport.sharedFar, 64);
+  buildRows(
+      rowCount, uint32_t(targetCount), progress, [&] { return RowBuilder(uint32_t(targetCount)); },
       [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
         if (r < points) pointRow(uint32_t(r), row);
         else backRow(backClusters[r - points], row);

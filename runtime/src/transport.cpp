@@ -51,16 +51,22 @@ uint32_t SparseLinks::bitsFor(uint32_t targets) {
 
 void SparseLinks::appendRow(const uint32_t* targets, const float* weights, size_t n) {
   float largest = 0.0f;
-  for (size_t i = 0; i < n; ++i) largest = std::max(largest, weights[i]);
+  double total = 0.0;
+  for (size_t i = 0; i < n; ++i) largest = std::max(largest, weights[i]), total += double(weights[i]);
   const float top = float(maxCode());
-  const float scale = largest > 0.0f ? largest / top : 0.0f;
-  rowScale.push_back(scale);
-  for (size_t i = 0; i < n && scale > 0.0f; ++i) {
+  const float step = largest > 0.0f ? largest / top : 0.0f;
+  uint64_t codes = 0;
+  for (size_t i = 0; i < n && step > 0.0f; ++i) {
     // Rounded half up (weights are not negative) without a call to round().
-    const double q = std::floor(double(weights[i] / scale) + 0.5);
+    const double q = std::floor(double(weights[i] / step) + 0.5);
     if (!(q >= 1.0)) continue;
-    link.push_back((uint32_t(std::min(q, double(top))) << targetBits) | targets[i]);
+    const uint32_t code = uint32_t(std::min(q, double(top)));
+    codes += code;
+    link.push_back((code << targetBits) | targets[i]);
   }
+  // The scale that keeps the row's sum (its energy): the codes' rounding errors, and weights
+  // too small for a code, go to every link in proportion instead of being lost.
+  rowScale.push_back(codes > 0 ? float(total / double(codes)) : 0.0f);
   rowStart.push_back(uint32_t(link.size()));
 }
 
@@ -158,10 +164,32 @@ size_t bytesOf(const SparseMatrix& m) {
   return bytesOf(m.rowStart) + bytesOf(m.column) + bytesOf(m.weight);
 }
 
+// A SparseLinks' shape, its target bits, and every target below `targets`.
+bool checkLinks(const SparseLinks& m, size_t rows, size_t targets, const char* name,
+                std::ostringstream& why) {
+  if (m.targetBits < 1 || m.targetBits > 32 - kMinWeightBits) {
+    why << name << ": " << m.targetBits << " target bits, expected 1 to " << 32 - kMinWeightBits;
+    return false;
+  }
+  // The rows' shape here; their targets (the low bits of each link) below.
+  if (!checkRows(m.rowStart, m.link, rows, SIZE_MAX, name, why)) return false;
+  for (size_t k = 0; k < m.size(); ++k)
+    if (m.targetAt(k) >= targets) {
+      why << name << ": entry " << k << " refers to " << m.targetAt(k) << " of " << targets;
+      return false;
+    }
+  if (m.rowScale.size() != rows) {
+    why << name << ": row scales do not match the rows";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 size_t TransportData::memoryBytes() const {
   size_t b = bytesOf(links.rowStart) + bytesOf(links.link) + bytesOf(links.rowScale) +
+             bytesOf(sharedFar.rowStart) + bytesOf(sharedFar.link) + bytesOf(sharedFar.rowScale) +
              bytesOf(farClusters) + bytesOf(clusterGather) + bytesOf(pointFilter) +
              bytesOf(texelGather) + bytesOf(texelPoint) + bytesOf(texelNeighbours) +
              bytesOf(texelSky) + bytesOf(clusterSky) + bytesOf(clusterMaterial) +
@@ -177,39 +205,32 @@ std::string TransportData::validate() const {
   std::ostringstream why;
   const size_t texels = texelCount, clusters = clusterCount, points = gatherPointCount;
   // rows() is rowStart.size() - 1: an empty offset array would wrap around.
-  if (links.rowStart.empty() || clusterGather.rowStart.empty() || pointFilter.rowStart.empty() ||
-      texelGather.rowStart.empty() || farClusters.rowStart.empty())
+  if (links.rowStart.empty() || sharedFar.rowStart.empty() || clusterGather.rowStart.empty() ||
+      pointFilter.rowStart.empty() || texelGather.rowStart.empty() || farClusters.rowStart.empty())
     return "a sparse matrix has no row offsets (not even the leading 0)";
   if (links.rows() < points) {
     why << "links: " << links.rows() << " rows, fewer than the " << points << " gather points";
     return why.str();
   }
   const size_t rows = links.rows();
-  // Far clusters: each a mix of clusters, and with the clusters no more than links address.
-  if (farClusters.rows() >= kMaxLinkTargets ||
-      size_t(clusters) + farClusters.rows() > kMaxLinkTargets) {
-    why << "links: " << clusters << " clusters and " << farClusters.rows()
-        << " far clusters, more than links address (" << kMaxLinkTargets << ")";
+  // Far clusters (each a mix of clusters) and shared far fields: with the clusters, no more
+  // than links address.
+  if (farClusters.rows() >= kMaxLinkTargets || sharedFar.rows() >= kMaxLinkTargets ||
+      size_t(clusters) + farClusters.rows() + sharedFar.rows() > kMaxLinkTargets) {
+    why << "links: " << clusters << " clusters, " << farClusters.rows() << " far clusters and "
+        << sharedFar.rows() << " shared far fields, more than links address (" << kMaxLinkTargets
+        << ")";
     return why.str();
   }
-  const size_t targets = clusters + farClusters.rows();
   if (!checkRows(farClusters.rowStart, farClusters.column, farClusters.rows(), clusters,
                  "far clusters", why))
     return why.str();
   if (farClusters.weight.size() != farClusters.column.size())
     return "far clusters: as many weights as columns";
-  if (links.targetBits < 1 || links.targetBits > 32 - kMinWeightBits) {
-    why << "links: " << links.targetBits << " target bits, expected 1 to " << 32 - kMinWeightBits;
+  const size_t farBase = clusters + farClusters.rows();
+  if (!checkLinks(sharedFar, sharedFar.rows(), farBase, "shared far fields", why) ||
+      !checkLinks(links, rows, farBase + sharedFar.rows(), "links", why))
     return why.str();
-  }
-  // The rows' shape here; their targets (the low bits of each link) below.
-  if (!checkRows(links.rowStart, links.link, rows, SIZE_MAX, "links", why)) return why.str();
-  for (size_t k = 0; k < links.size(); ++k)
-    if (links.targetAt(k) >= targets) {
-      why << "links: entry " << k << " refers to " << links.targetAt(k) << " of " << targets;
-      return why.str();
-    }
-  if (links.rowScale.size() != rows) return "links: row scales do not match the rows";
   if (!checkRows(clusterGather.rowStart, clusterGather.column, clusters, rows, "cluster gather", why) ||
       !checkRows(pointFilter.rowStart, pointFilter.column,
                  pointFilter.rows() == 0 ? 0 : points, points, "gather point filter", why) ||

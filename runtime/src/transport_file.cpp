@@ -59,14 +59,15 @@ constexpr const char* kMaterials = "MATL";
 constexpr const char* kSources = "SRCS";
 constexpr const char* kClusters = "CLUS";
 constexpr const char* kFarClusters = "FARC";
+constexpr const char* kSharedFar = "SFAR";
 constexpr const char* kLinks = "LINK";
 constexpr const char* kClusterGather = "CGAT";
 constexpr const char* kGatherMaps = "GMAP";
 constexpr const char* kTexelSky = "TSKY";
 constexpr const char* kClusterSky = "CSKY";
-constexpr const char* kRequired[] = {kInfo,  kAtlases,       kMaterials,   kSources,
-                                     kClusters, kFarClusters, kLinks, kClusterGather, kGatherMaps,
-                                     kTexelSky, kClusterSky};
+constexpr const char* kRequired[] = {kInfo,      kAtlases,      kMaterials,   kSources,
+                                     kClusters,  kFarClusters,  kSharedFar,   kLinks,
+                                     kClusterGather, kGatherMaps, kTexelSky,  kClusterSky};
 constexpr size_t kSectionCount = sizeof(kRequired) / sizeof(kRequired[0]);
 
 constexpr size_t kEntrySize = 32;    // one section table entry
@@ -129,6 +130,12 @@ struct Out {
     array(rowStart);
     array(column);
     array(weight);
+  }
+  void links(const SparseLinks& m) {
+    scalar(m.targetBits);
+    array(m.rowStart);
+    array(m.link);
+    array(m.rowScale);
   }
 };
 
@@ -198,13 +205,8 @@ const SectionWriter kWriters[] = {
      [](const TransportData& d, Out& o) {
        o.sparse(d.farClusters.rowStart, d.farClusters.column, d.farClusters.weight);
      }},
-    {kLinks, 0,
-     [](const TransportData& d, Out& o) {
-       o.scalar(d.links.targetBits);
-       o.array(d.links.rowStart);
-       o.array(d.links.link);
-       o.array(d.links.rowScale);
-     }},
+    {kSharedFar, 0, [](const TransportData& d, Out& o) { o.links(d.sharedFar); }},
+    {kLinks, 0, [](const TransportData& d, Out& o) { o.links(d.links); }},
     {kClusterGather, 0,
      [](const TransportData& d, Out& o) {
        o.sparse(d.clusterGather.rowStart, d.clusterGather.column, d.clusterGather.weight);
@@ -227,6 +229,7 @@ uint64_t sectionCount(const TransportData& d, const char* id) {
   if (id == kSources) return d.sources.size();
   if (id == kClusters) return d.clusterMaterial.size();
   if (id == kFarClusters) return rowsOf(d.farClusters.rowStart);
+  if (id == kSharedFar) return rowsOf(d.sharedFar.rowStart);
   if (id == kLinks) return rowsOf(d.links.rowStart);
   if (id == kClusterGather) return rowsOf(d.clusterGather.rowStart);
   if (id == kGatherMaps) return d.texelPoint.size();
@@ -402,12 +405,12 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
     return true;
   }
   const std::vector<uint32_t>* rowStart = nullptr;
-  if (id == kLinks) {
-    if (!in.scalar(d.links.targetBits, "target bits") ||
-        !in.rowStart(d.links.rowStart, "row offsets") || !in.array(d.links.link, "links") ||
-        !in.array(d.links.rowScale, "row scales"))
+  if (id == kLinks || id == kSharedFar) {
+    SparseLinks& m = id == kLinks ? d.links : d.sharedFar;
+    if (!in.scalar(m.targetBits, "target bits") || !in.rowStart(m.rowStart, "row offsets") ||
+        !in.array(m.link, "links") || !in.array(m.rowScale, "row scales"))
       return false;
-    rowStart = &d.links.rowStart;
+    rowStart = &m.rowStart;
   } else if (id == kFarClusters) {
     if (!readSparse(in, d.farClusters.rowStart, d.farClusters.column, d.farClusters.weight))
       return false;
@@ -451,6 +454,7 @@ const char* sectionOfComplaint(const std::string& why) {
     const char* prefix;
     const char* id;
   } kPrefixes[] = {{"links", kLinks},
+                   {"shared far fields", kSharedFar},
                    {"far clusters", kFarClusters},
                    {"cluster gather", kClusterGather},
                    {"gather maps", kGatherMaps},

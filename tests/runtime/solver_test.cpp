@@ -1,9 +1,11 @@
 // The radiosity solver on synthetic transport with analytic answers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "afterglow/runtime/solver.h"
+#include "test_rng.h"
 
 namespace afterglow::runtime {
 namespace {
@@ -165,6 +167,76 @@ TEST(RuntimeSolver, FarClustersGatherTheirClustersMean) {
   std::vector<glm::vec3> direct, indirect;
   solver.gatherTexels(direct, indirect);
   EXPECT_NEAR(indirect[0].x, 0.5f * farR, 1e-6f);
+}
+
+// A shared far field gathers from the far clusters and the clusters, after both are up to
+// date, and the rows that link it read its light like a cluster's.
+TEST(RuntimeSolver, SharedFarFieldsGatherBeforeTheRowsThatLinkThem) {
+  TransportData d;
+  d.clusterCount = 2;
+  d.gatherPointCount = 2;
+  d.texelCount = 2;
+  d.materials.push_back({"grey", glm::vec3(0.5f), glm::vec3(0.0f)});
+  d.clusterMaterial = {0, 0};
+  d.clusterAlbedoTexture.assign(2, glm::vec3(1.0f));
+  d.clusterEmissionTexture.assign(2, glm::vec3(1.0f));
+  Source light;
+  light.name = "sun";
+  light.texelTransfer = {0.0f, 0.0f};
+  light.clusterTransfer = {1.0f, 0.5f};
+  d.sources.push_back(light);
+  const uint32_t both[2] = {0, 1}, farAndOne[2] = {1, 2}, shared = 3, sharedAndZero[2] = {0, 3};
+  const uint32_t none = 0, first = 0, second = 1;
+  const float mean[2] = {0.75f, 0.25f}, split[2] = {0.4f, 0.6f}, half = 0.5f,
+              pair[2] = {0.1f, 0.3f}, zero = 0.0f, one = 1.0f;
+  d.farClusters.appendRow(both, mean, 2);            // target 2
+  d.sharedFar.appendRow(farAndOne, split, 2);        // target 3: 0.4 R_1 + 0.6 R_far
+  d.links.appendRow(&shared, &half, 1);              // point 0: half its rays go far
+  d.links.appendRow(sharedAndZero, pair, 2);         // point 1: 0.1 R_0 + 0.3 shared
+  d.clusterGather.appendRow(&none, &zero, 1);        // the clusters gather nothing back
+  d.clusterGather.appendRow(&none, &zero, 1);
+  d.texelGather.appendRow(&first, &one, 1);
+  d.texelGather.appendRow(&second, &one, 1);
+  ASSERT_EQ(d.sharedFarBase(), 3u);
+  ASSERT_EQ(d.linkTargetCount(), 4u);
+  ASSERT_EQ(d.validate(), "");
+  Solver solver(d);
+  solver.iterate();  // one pass: every phase reads what the one before it wrote
+  const float r0 = 0.5f * 1.0f, r1 = 0.5f * 0.5f;  // albedo × direct
+  const float farR = 0.75f * r0 + 0.25f * r1;
+  const float sharedR = 0.4f * r1 + 0.6f * farR;
+  EXPECT_NEAR(solver.rowGathered()[0].x, 0.5f * sharedR, 1e-6f);
+  EXPECT_NEAR(solver.rowGathered()[1].x, 0.1f * r0 + 0.3f * sharedR, 1e-6f);
+
+  // Its rows may not link shared fields: the solver fills them in one pass, in order.
+  TransportData bad = d;
+  bad.sharedFar = SparseLinks();
+  bad.sharedFar.appendRow(&shared, &one, 1);
+  EXPECT_NE(bad.validate().find("shared far fields: entry 0 refers to 3 of 3"), std::string::npos)
+      << bad.validate();
+}
+
+// A row's quantised links keep its exact sum: rounding moves weight between the links, and
+// weights too small for a code go to the others, instead of light being made or lost.
+TEST(RuntimeSolver, QuantisedRowsKeepTheirSums) {
+  test::Rng rng{7};
+  for (uint32_t targets : {100u, 1u << 18, 1u << 22}) {
+    SparseLinks m(targets);
+    std::vector<uint32_t> columns;
+    std::vector<float> weights;
+    const uint32_t n = std::min(targets, 300u);
+    for (uint32_t k = 0; k < n; ++k) {
+      columns.push_back(uint32_t(uint64_t(k) * targets / n));  // ascending
+      // Mostly tiny weights next to one large one: many round to a code of 0 or 1.
+      weights.push_back(k == 0 ? 0.5f : 1e-6f + 1e-4f * rng.unit());
+    }
+    double sum = 0.0;
+    for (float w : weights) sum += double(w);
+    m.appendRow(columns.data(), weights.data(), columns.size());
+    double kept = 0.0;
+    for (size_t k = 0; k < m.size(); ++k) kept += double(m.weightAt(0, k));
+    EXPECT_NEAR(kept, sum, 1e-6 * sum) << targets << " targets";
+  }
 }
 
 }  // namespace

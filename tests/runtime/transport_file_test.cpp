@@ -23,7 +23,7 @@ namespace {
 using test::Rng;
 
 struct Shape {
-  uint32_t texels = 300, clusters = 40, farClusters = 6, points = 90, backRows = 5;
+  uint32_t texels = 300, clusters = 40, farClusters = 6, sharedFar = 4, points = 90, backRows = 5;
   uint32_t linksPerRow = 12;
   int atlasSides[3][2] = {{16, 12}, {10, 10}, {7, 5}};
   int lightsWithTexelTransfer = 2;
@@ -98,12 +98,22 @@ TransportData makeTransport(const Shape& s, uint64_t seed = 1) {
   const uint32_t rows = s.points + s.backRows;
   std::vector<uint32_t> targets;
   std::vector<float> weights;
+  for (uint32_t r = 0; r < s.sharedFar; ++r) {  // far clusters only
+    targets.clear();
+    weights.clear();
+    for (uint32_t t = s.clusters + r % 2; t < s.clusters + s.farClusters; t += 2) {
+      targets.push_back(t);
+      weights.push_back(0.01f + rng.unit());
+    }
+    d.sharedFar.appendRow(targets.data(), weights.data(), targets.size());
+  }
   for (uint32_t r = 0; r < rows; ++r) {
     targets.clear();
     weights.clear();
     const uint32_t n = rng.below(s.linksPerRow * 2 + 1);
     uint32_t t = rng.below(3);
-    for (uint32_t k = 0; k < n && t < s.clusters + s.farClusters; ++k, t += 1 + rng.below(4)) {
+    for (uint32_t k = 0; k < n && t < s.clusters + s.farClusters + s.sharedFar;
+         ++k, t += 1 + rng.below(4)) {
       targets.push_back(t);
       weights.push_back(0.01f + rng.unit());
     }
@@ -193,6 +203,10 @@ void expectEqual(const TransportData& a, const TransportData& b) {
   EXPECT_EQ(a.links.link, b.links.link);
   EXPECT_EQ(a.links.rowScale, b.links.rowScale);
   expectSparseEqual(a.farClusters, b.farClusters, "far clusters");
+  EXPECT_EQ(a.sharedFar.targetBits, b.sharedFar.targetBits);
+  EXPECT_EQ(a.sharedFar.rowStart, b.sharedFar.rowStart);
+  EXPECT_EQ(a.sharedFar.link, b.sharedFar.link);
+  EXPECT_EQ(a.sharedFar.rowScale, b.sharedFar.rowScale);
   expectSparseEqual(a.clusterGather, b.clusterGather, "cluster gather");
   EXPECT_EQ(a.texelPoint, b.texelPoint);
   EXPECT_EQ(a.texelNeighbours, b.texelNeighbours);
@@ -323,7 +337,7 @@ TEST(TransportFile, TransportDataHasNoFieldTheFileMisses) {
   // The sizes with libstdc++ on 64-bit when this file format was written. A failure means a
   // field was added: serialise it (transport_file.cpp) and compare it in expectEqual() above.
 #if defined(__GLIBCXX__) && UINTPTR_MAX == 0xffffffffffffffffull
-  EXPECT_EQ(sizeof(TransportData), 752u);
+  EXPECT_EQ(sizeof(TransportData), 832u);
   EXPECT_EQ(sizeof(AtlasLayout), 128u);
   EXPECT_EQ(sizeof(Source), 112u);
   EXPECT_EQ(sizeof(MaterialParams), 56u);
@@ -500,7 +514,7 @@ TEST(TransportFile, SectionTableRules) {
   const TransportData data = makeTransport(Shape());
   const std::vector<uint8_t> bytes = serializeTransport(data);
   const std::vector<Section> sections = split(bytes);
-  ASSERT_EQ(sections.size(), 11u);
+  ASSERT_EQ(sections.size(), 12u);
   // join() rebuilds the writer's layout exactly.
   EXPECT_EQ(join(sections), bytes);
 
@@ -591,6 +605,15 @@ TEST(TransportFile, BadIndicesAreRefusedByValidate) {
     d.links.link.back() = (d.links.link.back() & ~d.links.targetMask()) | d.linkTargetCount();
     const std::string error = errorOf(d);
     EXPECT_EQ(error.rfind("section 'LINK': links: entry ", 0), 0u) << error;
+  }
+  {
+    TransportData d = good;
+    ASSERT_FALSE(d.sharedFar.link.empty());
+    // A shared far field of shared far fields.
+    d.sharedFar.link.back() =
+        (d.sharedFar.link.back() & ~d.sharedFar.targetMask()) | d.sharedFarBase();
+    const std::string error = errorOf(d);
+    EXPECT_EQ(error.rfind("section 'SFAR': shared far fields: entry ", 0), 0u) << error;
   }
   {
     TransportData d = good;

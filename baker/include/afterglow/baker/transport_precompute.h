@@ -46,6 +46,16 @@ struct LinkOptions {
   // faster bounce). The far cluster's light is its clusters' mean, which differs from the hit
   // cluster's own by less the farther it is seen from. <= 0: every hit links its cluster.
   float farDistance = 2.0f;    // far cluster radii
+  // Shared far fields (runtime::TransportData::sharedFar): gather points of one texel (those
+  // near other geometry, which gather alone with a full set of rays each) whose texels lie in
+  // one square of sharedFarSpan texels a side, on one surface and in sight of each other, pool
+  // their rays that link far clusters into one row, thinned to about sharedFarPoints points'
+  // rays (sharedFarPoints × texelRays: every k-th ray of each point, offset point by point, so
+  // the pool still covers the stratified hemisphere); each point links that row with its own
+  // far share. Fewer links; fewer rays behind each point's far field, but its neighbours'
+  // rays, which the smoothing would have mixed in anyway. sharedFarSpan <= 1: off.
+  int sharedFarSpan = 4;         // texels
+  float sharedFarPoints = 2.0f;  // gather points' rays
   int clusterRays = 256;       // rays per back-side cluster of double-sided geometry (fewer
                                //   for small ones: at most texelRays per texel)
   // Links below this form factor are left out and the rest of their row scaled up to keep its

@@ -3,12 +3,14 @@
 //   cluster reflected light   R_c = ρ_c · (D_c + S_c + Σ_r A_cr V_r)
 //   gathered light per row    V_r = Σ_j F_rj R_j          (rows: gather points, back clusters;
 //                                                          j: clusters, then far clusters,
-//                                                          R_f = Σ_c M_fc R_c)
+//                                                          R_f = Σ_c M_fc R_c, then shared
+//                                                          far fields, R_s = Σ_j G_sj R_j)
 //   texel value (E/π)         T_t = D_t + S_t + indirectIntensity · Σ_p B_tp (Φ^n V)_p
 //
 // D is direct light from punctual lights and emissive surfaces (sampled explicitly, which is why
 // emission enters texels and clusters through D and the links carry only R), S is sky light,
 // F the form factors (TransportData::links), M the far clusters' mix of clusters (farClusters),
+// G the shared far fields' form factors to clusters and far clusters (sharedFar),
 // A the clusters' gather (clusterGather), Φ one pass of smoothing between gather points
 // (pointFilter, n = filterPasses) and B the texels' interpolation (texelGather). For bounces,
 // D_c uses each light's bounceIntensity.
@@ -95,8 +97,8 @@ class Solver {
     else run(0, blocks);
   }
   static constexpr size_t kBlock = 2048;  // clusters, rows or texels per block of work
-  // V_r for every row from the current R.
-  void gatherRows();
+  // out[row] = Σ link weight × R[target] over every row of m (the hot loop of a bounce).
+  void gatherRows(const SparseLinks& m, glm::vec4* out);
 
   const TransportData& data_;
   ParallelFor parallelFor_;
@@ -105,7 +107,8 @@ class Solver {
   std::vector<glm::vec3> clusterDirect_;    // D_c (with bounceIntensity) + S_c
   std::vector<glm::vec3> reflected_;        // R_c
   std::vector<glm::vec4> reflected4_;       // R_c padded to 16 bytes for the links' inner
-                                            //   loop, then the far clusters' R_f
+                                            //   loop, then the far clusters' R_f and
+                                            //   the shared far fields' R_s
   std::vector<glm::vec4> gathered_;         // V_r
   mutable std::vector<glm::vec4> filtered_; // smoothing passes over the gather points
   mutable std::vector<glm::vec4> scratch_;

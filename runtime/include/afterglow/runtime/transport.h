@@ -31,9 +31,10 @@ constexpr int kNeighbourOffsets[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0},
 // code(k) × rowScale[r] for k in [rowStart[r], rowStart[r+1]), targets ascending. A weight is
 // the fraction of a point's cosine-weighted hemisphere that sees the target cluster; codes are
 // relative to the row's largest weight, which takes the largest code (2^w - 1 for w =
-// 32 - targetBits weight bits, at most 16), so each weight is within half a code of that largest:
-// 1/65535 of it when targets fit in 16 bits, 1/16383 with 18 (Sponza's 230k clusters and far
-// clusters).
+// 32 - targetBits weight bits, at most 16), so each weight is within about half a code of that
+// largest: 1/65535 of it when targets fit in 16 bits, 1/8191 with 19 (Sponza's clusters, far
+// clusters and shared far fields). rowScale makes the codes sum to the row's exact sum, so
+// rounding moves light between a row's links but neither adds nor loses any.
 constexpr uint32_t kMinWeightBits = 10;
 constexpr uint32_t kMaxWeightBits = 16;
 constexpr uint32_t kMaxLinkTargets = 1u << (32 - kMinWeightBits);
@@ -62,7 +63,8 @@ struct SparseLinks {
     return float(link[k] >> targetBits) * rowScale[row];
   }
   // Appends a row: n (target, form factor) pairs with ascending targets below 2^targetBits.
-  // Weights that round to zero against the row's largest are left out.
+  // Weights that round to zero against the row's largest are left out (their share goes to
+  // the others: the row keeps its sum).
   void appendRow(const uint32_t* targets, const float* weights, size_t n);
 };
 
@@ -165,10 +167,19 @@ struct TransportData {
   // instead of each making one. Far cluster f -> clusters (weights sum to 1); its rows are the
   // far clusters, so their count is farClusters.rows().
   SparseMatrix farClusters;
+  // Shared far fields: neighbouring gather points on one surface see nearly the same distant
+  // surfaces, so their far-cluster rays are pooled into one row here instead of each making
+  // links of its own (a point near other geometry gathers alone with a full set of rays, and
+  // most of its links went to far clusters seen by its neighbours too). A shared row's weights
+  // sum to 1 and its targets are clusters and far clusters (below sharedFarBase()); a gather
+  // point's row links it with the share of its own rays that reached far clusters, so each
+  // point keeps its own visibility and only the far light's distribution is shared. Computed
+  // once per bounce, after the far clusters, before the links.
+  SparseLinks sharedFar;
   // Form factors, a row per gather point (rows 0 .. gatherPointCount-1) and then a row per
   // back-side cluster of double-sided geometry (which has no texels, and gathers with rays of
-  // its own): row -> what it sees, clusters (targets below clusterCount) and far clusters
-  // (target clusterCount + f).
+  // its own): row -> what it sees, clusters (targets below clusterCount), far clusters
+  // (target clusterCount + f) and shared far fields (target sharedFarBase() + s).
   SparseLinks links;
   // Cluster -> rows: a cluster's incident bounced light, the area-weighted mean of its texels'
   // gather points' rows (weights sum to 1), or its own row for a back-side cluster.
@@ -200,8 +211,12 @@ struct TransportData {
   float albedoBoost = 1.0f;        // >= 1, pushes albedo toward white for bounces
   glm::vec3 skySh[kShCount] = {};  // sky radiance as SH L2 (RGB)
 
-  // What links may target: the clusters, then the far clusters.
-  uint32_t linkTargetCount() const { return clusterCount + uint32_t(farClusters.rows()); }
+  // What links may target: the clusters, the far clusters, then the shared far fields (whose
+  // own rows target only the first two).
+  uint32_t sharedFarBase() const { return clusterCount + uint32_t(farClusters.rows()); }
+  uint32_t linkTargetCount() const { return sharedFarBase() + uint32_t(sharedFar.rows()); }
+  // Links a bounce computes: the rows' and the shared far fields'.
+  size_t linkCount() const { return links.size() + sharedFar.size(); }
   // The number of rows of `links` that belong to back-side clusters.
   uint32_t backRowCount() const { return uint32_t(links.rows()) - gatherPointCount; }
   // Empty when every array agrees with the counts (what the solver indexes without checks),
