@@ -415,6 +415,30 @@ void buildFurnaceBox(FurnaceBox& box) {
   box.texels = std::move(texels.value());
 }
 
+// The furnace box's clusters and one level of far clusters (default options).
+struct FurnaceClusters {
+  Clusters clusters;
+  std::vector<Clusters> far;
+};
+
+FurnaceClusters clusterFurnaceBox(const FurnaceBox& box) {
+  ClusterOptions copt;
+  FurnaceClusters out;
+  out.clusters = computeClusters(box.scene, box.tracer.get(), box.texels, nullptr, copt);
+  out.far = {computeClusters(box.scene, box.tracer.get(), box.texels, nullptr,
+                             farClusterOptions(copt, 1))};
+  return out;
+}
+
+// Direct light from the box's emissive walls, then the solve against Le / (1 − ρ).
+void expectLinkedFurnace(const FurnaceBox& box, const Clusters& clusters,
+                         runtime::TransportData& data) {
+  DirectOptions dopt;
+  dopt.emissiveSamples = 2048;
+  ASSERT_TRUE(computeDirect(box.scene, *box.tracer, box.texels, clusters, dopt, data).isOk());
+  expectFurnaceRadiance(data, &box.texels.valid);
+}
+
 // A closed cube of six quads, every surface with albedo ρ and radiance Le: every texel's row
 // sums to 1, no sky, and the solved E/π is Le / (1 − ρ).
 TEST(BakerTransport, WhiteFurnaceConvergesToAnalyticRadiance) {
@@ -496,10 +520,9 @@ TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
   const Scene& scene = box.scene;
   const RayTracer& tracer = *box.tracer;
   TexelSet& texels = box.texels;
-  ClusterOptions copt;
-  const Clusters clusters = computeClusters(scene, &tracer, texels, nullptr, copt);
-  const std::vector<Clusters> far = {
-      computeClusters(scene, &tracer, texels, nullptr, farClusterOptions(copt, 1))};
+  const FurnaceClusters clustered = clusterFurnaceBox(box);
+  const Clusters& clusters = clustered.clusters;
+  const std::vector<Clusters>& far = clustered.far;
   ASSERT_LT(far[0].size(), clusters.size());
   LinkOptions lopt;
   lopt.texelRays = 256;
@@ -525,10 +548,7 @@ TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
     EXPECT_NEAR(rowSum(data.links, pointOf[t]), 1.0f, 2e-3f) << t;
   }
 
-  DirectOptions dopt;
-  dopt.emissiveSamples = 2048;
-  ASSERT_TRUE(computeDirect(scene, tracer, texels, clusters, dopt, data).isOk());
-  expectFurnaceRadiance(data, &box.texels.valid);
+  expectLinkedFurnace(box, clusters, data);
 }
 
 // Shared far fields move light, never make or lose it: a point that shares one links it with
@@ -540,10 +560,9 @@ TEST(BakerTransport, SharedFarFieldsKeepEachPointsFarShareAndTheFurnace) {
   const Scene& scene = box.scene;
   const RayTracer& tracer = *box.tracer;
   TexelSet& texels = box.texels;
-  ClusterOptions copt;
-  const Clusters clusters = computeClusters(scene, &tracer, texels, nullptr, copt);
-  const std::vector<Clusters> far = {
-      computeClusters(scene, &tracer, texels, nullptr, farClusterOptions(copt, 1))};
+  const FurnaceClusters clustered = clusterFurnaceBox(box);
+  const Clusters& clusters = clustered.clusters;
+  const std::vector<Clusters>& far = clustered.far;
   LinkOptions lopt;
   lopt.texelRays = 256;
   lopt.farDistance = 1.0f;
@@ -580,10 +599,7 @@ TEST(BakerTransport, SharedFarFieldsKeepEachPointsFarShareAndTheFurnace) {
   }
   EXPECT_GT(sharing, size_t(data.gatherPointCount) / 2);
 
-  DirectOptions dopt;
-  dopt.emissiveSamples = 2048;
-  ASSERT_TRUE(computeDirect(scene, tracer, texels, clusters, dopt, data).isOk());
-  expectFurnaceRadiance(data, &box.texels.valid);
+  expectLinkedFurnace(box, clusters, data);
 }
 
 // The Cornell box's ceiling light seen from a floor point: the explicit area-light

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "afterglow/runtime/solver.h"
 #include "test_rng.h"
@@ -93,23 +95,35 @@ TEST(RuntimeSolver, ConstantSkyOnUnoccludedTexelEqualsSkyRadiance) {
   EXPECT_NEAR(texels[0].z, 1.2f, 1.2f / 2048.0f);
 }
 
-// Bounced light reaches texels through the smoothing between gather points and the texels'
-// interpolation of them, both linear maps applied as written.
-TEST(RuntimeSolver, GatherPointFilterAndTexelGatherApplyTheirWeights) {
+// Two clusters (materials as given, untextured) lit by one light with the given unit cluster
+// transfer, `points` gather points and texels, no links or maps yet: the tests below add the
+// few they check by hand.
+TransportData twoClusters(uint32_t points, std::vector<MaterialParams> materials,
+                          std::vector<uint32_t> clusterMaterial, std::vector<float> clusterLight) {
   TransportData d;
   d.clusterCount = 2;
-  d.gatherPointCount = 2;
-  d.texelCount = 2;
-  d.materials.push_back({"grey", glm::vec3(0.5f), glm::vec3(0.0f)});
-  d.materials.push_back({"black", glm::vec3(0.0f), glm::vec3(0.0f)});
-  d.clusterMaterial = {0, 1};
+  d.gatherPointCount = points;
+  d.texelCount = points;
+  d.materials = std::move(materials);
+  d.clusterMaterial = std::move(clusterMaterial);
   d.clusterAlbedoTexture.assign(2, glm::vec3(1.0f));
   d.clusterEmissionTexture.assign(2, glm::vec3(1.0f));
   Source light;
   light.name = "sun";
-  light.texelTransfer = {0.0f, 0.0f};
-  light.clusterTransfer = {1.0f, 0.0f};  // only cluster 0 is lit: R = (0.5, 0)
+  light.texelTransfer.assign(points, 0.0f);
+  light.clusterTransfer = std::move(clusterLight);
   d.sources.push_back(light);
+  return d;
+}
+
+// Bounced light reaches texels through the smoothing between gather points and the texels'
+// interpolation of them, both linear maps applied as written.
+TEST(RuntimeSolver, GatherPointFilterAndTexelGatherApplyTheirWeights) {
+  // Only cluster 0 is lit: R = (0.5, 0).
+  TransportData d = twoClusters(2,
+                                {{"grey", glm::vec3(0.5f), glm::vec3(0.0f)},
+                                 {"black", glm::vec3(0.0f), glm::vec3(0.0f)}},
+                                {0, 1}, {1.0f, 0.0f});
   const uint32_t c0 = 0, c1 = 1, both[2] = {0, 1};
   const float one = 1.0f, halves[2] = {0.5f, 0.5f}, mix[2] = {0.75f, 0.25f};
   d.links.appendRow(&c0, &one, 1);  // point 0 sees cluster 0, point 1 the black cluster
@@ -138,19 +152,8 @@ TEST(RuntimeSolver, GatherPointFilterAndTexelGatherApplyTheirWeights) {
 // A far cluster's reflected light is the weighted mean of its clusters', and a row that links it
 // gathers that mean: two lit clusters (R = 0.5 and 0.25) under one far cluster weighted 3:1.
 TEST(RuntimeSolver, FarClustersGatherTheirClustersMean) {
-  TransportData d;
-  d.clusterCount = 2;
-  d.gatherPointCount = 1;
-  d.texelCount = 1;
-  d.materials.push_back({"grey", glm::vec3(0.5f), glm::vec3(0.0f)});
-  d.clusterMaterial = {0, 0};
-  d.clusterAlbedoTexture.assign(2, glm::vec3(1.0f));
-  d.clusterEmissionTexture.assign(2, glm::vec3(1.0f));
-  Source light;
-  light.name = "sun";
-  light.texelTransfer = {0.0f};
-  light.clusterTransfer = {1.0f, 0.5f};
-  d.sources.push_back(light);
+  TransportData d =
+      twoClusters(1, {{"grey", glm::vec3(0.5f), glm::vec3(0.0f)}}, {0, 0}, {1.0f, 0.5f});
   const uint32_t both[2] = {0, 1}, far = 2, none = 0;
   const float mean[2] = {0.75f, 0.25f}, half = 0.5f, zero = 0.0f, one = 1.0f;
   d.farClusters.appendRow(both, mean, 2);
@@ -172,19 +175,8 @@ TEST(RuntimeSolver, FarClustersGatherTheirClustersMean) {
 // A shared far field gathers from the far clusters and the clusters, after both are up to
 // date, and the rows that link it read its light like a cluster's.
 TEST(RuntimeSolver, SharedFarFieldsGatherBeforeTheRowsThatLinkThem) {
-  TransportData d;
-  d.clusterCount = 2;
-  d.gatherPointCount = 2;
-  d.texelCount = 2;
-  d.materials.push_back({"grey", glm::vec3(0.5f), glm::vec3(0.0f)});
-  d.clusterMaterial = {0, 0};
-  d.clusterAlbedoTexture.assign(2, glm::vec3(1.0f));
-  d.clusterEmissionTexture.assign(2, glm::vec3(1.0f));
-  Source light;
-  light.name = "sun";
-  light.texelTransfer = {0.0f, 0.0f};
-  light.clusterTransfer = {1.0f, 0.5f};
-  d.sources.push_back(light);
+  TransportData d =
+      twoClusters(2, {{"grey", glm::vec3(0.5f), glm::vec3(0.0f)}}, {0, 0}, {1.0f, 0.5f});
   const uint32_t both[2] = {0, 1}, farAndOne[2] = {1, 2}, shared = 3, sharedAndZero[2] = {0, 3};
   const uint32_t none = 0, first = 0, second = 1;
   const float mean[2] = {0.75f, 0.25f}, split[2] = {0.4f, 0.6f}, half = 0.5f,
