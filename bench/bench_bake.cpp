@@ -5,6 +5,7 @@
 //       [--stride N] [--threads N] [--quality draft|default|high] [--texel-rays N]
 //       [--near-rays N] [--near-distance X] [--near-field X] [--block-distance X]
 //       [--cluster-size M] [--cluster-texels N] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
+//       [--far-levels N] [--far-scale X] [--far-distance X] [--shared-far-span N] [--shared-far-points X]
 //       [--filter-passes N] [--filter-reach X] [--min-weight W] [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]] [--repeat N]
 // SCENE defaults to the Cornell box of ../shared/scenes; --spp 0 only times the bake; --repeat
@@ -91,6 +92,11 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--adaptive-scale") options.clusters.adaptiveScale = float(next());
     else if (arg == "--distance-ratio") options.clusters.maxDistanceRatio = float(next());
     else if (arg == "--min-texels") options.clusters.minTexels = int(next());
+    else if (arg == "--far-levels") options.clusters.farLevels = int(next());
+    else if (arg == "--far-scale") options.clusters.farScale = float(next());
+    else if (arg == "--far-distance") options.links.farDistance = float(next());
+    else if (arg == "--shared-far-span") options.links.sharedFarSpan = int(next());
+    else if (arg == "--shared-far-points") options.links.sharedFarPoints = float(next());
     else if (arg == "--filter-passes") options.links.filterPasses = int(next());
     else if (arg == "--min-weight") options.links.minWeight = float(next());
     else if (arg == "--filter-reach") options.links.filterReach = float(next());

@@ -62,7 +62,7 @@ int measure(const char* label, scenes::Scene scene, float texelsPerUnit, int atl
   if (!runtime::saveTransport(baked->transport, path, &error)) return fail(error);
   const runtime::TransportData& t = baked->transport;
   const uint32_t texels = t.texelCount, clusters = t.clusterCount, points = t.gatherPointCount;
-  const size_t links = t.linkCount(), sharedLinks = t.sharedFar.size(), shared = t.sharedFar.rows();
+  const size_t links = t.linkCount(), sharedLinks = t.sharedFar.linkCount(), shared = t.sharedFar.rows();
   baked = Status::error("released");  // the runtime's memory below is its own
 
   std::error_code ec;

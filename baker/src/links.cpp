@@ -259,26 +259,31 @@ std::vector<uint8_t> markFilterNeighbours(const RayTracer& tracer, const TexelSe
 }
 
 // Far clusters as link targets: per level and texel, its far cluster (front sides only,
-// numbered from 0 across the levels), and per far cluster the squared distance beyond which a
-// hit links it.
+// numbered from 0 across the levels), per far cluster the squared distance beyond which a hit
+// links it, and what such a hit links: the far cluster's row in transport.farClusters, or, for
+// a far cluster of a single cluster (a small instance, most of them on Sponza), that cluster
+// itself, which reflects the very same light without a far row to mix each bounce or a slot
+// of R to read it from.
 struct FarTargets {
   std::vector<std::vector<uint32_t>> ofTexel;  // [level][texel]
   std::vector<float> reach2;
+  std::vector<uint32_t> target;  // a cluster, or clusterCount + its row of farClusters
 
-  // The coarsest far cluster of texel t that a point at squared distance d2 sees from far
-  // enough, or kNoTexel.
+  // The link target of the coarsest far cluster of texel t that a point at squared distance
+  // d2 sees from far enough, or kNoTexel.
   uint32_t of(uint32_t t, float d2) const {
     for (size_t level = ofTexel.size(); level-- > 0;) {
       const uint32_t f = ofTexel[level][t];
-      if (f != kNoTexel && d2 > reach2[f]) return f;
+      if (f != kNoTexel && d2 > reach2[f]) return target[f];
     }
     return kNoTexel;
   }
+  bool empty() const { return reach2.empty(); }
 };
 
 // Numbers the front far clusters level by level, fills transport.farClusters (each the
-// area-weighted mix of the clusters its texels belong to) and the targets. A far cluster's
-// radius is the farthest of its texels' corners from its centre.
+// area-weighted mix of the clusters its texels belong to, for those of several clusters) and
+// the targets. A far cluster's radius is the farthest of its texels' corners from its centre.
 FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
                       const std::vector<Clusters>& levels, float farDistance,
                       runtime::TransportData& transport) {
@@ -293,16 +298,23 @@ FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
       const uint32_t f = uint32_t(out.reach2.size());
       entries.clear();
       float radius = 0.0f;
+      bool single = true;
       for (uint32_t k = far.firstTexel[c]; k < far.firstTexel[c + 1]; ++k) {
         const uint32_t t = far.memberTexels[k];
         if (clusters.texelCluster[t] == kNoTexel) continue;  // (every valid texel has one)
         ofTexel[t] = f;
+        single = single && (entries.empty() || entries[0].first == clusters.texelCluster[t]);
         entries.emplace_back(clusters.texelCluster[t], texels.area[t]);
         radius = std::max(radius, glm::length(texels.position[t] - far.position[c]) +
                                       0.7072f * texels.edge[t]);
       }
       const float reach = farDistance * radius;
       out.reach2.push_back(reach * reach);
+      if (single && !entries.empty()) {
+        out.target.push_back(entries[0].first);
+        continue;
+      }
+      out.target.push_back(clusters.size() + uint32_t(transport.farClusters.rows()));
       transport.farClusters.appendNormalisedRow(entries);
     }
   }
@@ -436,7 +448,7 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   const FarTargets far = farTargets(texels, clusters, farLevels, options.farDistance, transport);
   // (Without far clusters there is no far field to share.)
   const FarGroups groups =
-      shareFarFields(tracer, texels, gather, far.reach2.empty() ? 0 : options.sharedFarSpan);
+      shareFarFields(tracer, texels, gather, far.empty() ? 0 : options.sharedFarSpan);
   const uint32_t sharedBase = transport.sharedFarBase();
   const uint64_t targetCount = uint64_t(sharedBase) + groups.size();
   if (targetCount > runtime::kMaxLinkTargets)
@@ -445,20 +457,23 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
         "address (%u): raise --cluster-size or --cluster-texels, or lower --texels-per-unit",
         (unsigned long long)targetCount, runtime::kMaxLinkTargets));
   // What a gather point's ray from texel `from` links to: the coarsest far cluster of a front
-  // hit seen from far enough, else the hit's cluster.
+  // hit seen from far enough (flagged kFarHit: the far field a group may share), else the
+  // hit's cluster.
+  constexpr uint32_t kFarHit = 0x80000000u;
+  static_assert(runtime::kMaxLinkTargets <= kFarHit, "the flag is above every target");
   auto targetOf = [&](uint32_t code, uint32_t from) -> uint32_t {
-    if (far.reach2.empty() || code == TexelGather::kNoHit || (code & TexelGather::kBackSide))
+    if (far.empty() || code == TexelGather::kNoHit || (code & TexelGather::kBackSide))
       return clusterOf(code);
     const uint32_t t = code & TexelGather::kTexelMask;
     const glm::vec3 d = texels.position[t] - texels.position[from];
     const uint32_t f = far.of(t, glm::dot(d, d));
-    return f != kNoTexel ? clusterCount + f : clusterOf(code);
+    return f != kNoTexel ? (f | kFarHit) : clusterOf(code);
   };
   std::vector<uint32_t> backClusters;
   for (uint32_t c = 0; c < clusterCount; ++c)
     if (clusters.back[c] && clusters.firstTexel[c] < clusters.firstTexel[c + 1]) backClusters.push_back(c);
 
-  // A gather point's rays pooled, visit(target, weight) per hit. Hits in the near field count
+  // A gather point's rays pooled, visit(target, weight, ray index, far) per hit. Hits in the near field count
   // over all the point's rays; hits beyond it were kept from the full sets only, and share
   // what the near hits and the misses leave (a ratio estimate), so every row plus its misses
   // sums to exactly 1 and a closed room neither gains nor loses light.
@@ -489,7 +504,7 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
         const bool inNearField = !(code & TexelGather::kFar);
         if (!inNearField && i >= gather.fullRays[t]) continue;  // counted by the full rays
         const uint32_t c = targetOf(code, t);
-        if (c != kNoTexel) visit(c, inNearField ? nearWeight : farWeight, i);
+        if (c != kNoTexel) visit(c & ~kFarHit, inNearField ? nearWeight : farWeight, i, c >= kFarHit);
       }
     }
   };
@@ -498,8 +513,8 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   auto pointRow = [&](uint32_t p, RowBuilder& row) {
     const uint32_t group = groups.ofPoint[p];
     double shared = 0.0;
-    pointHits(p, [&](uint32_t c, double w, uint32_t) {
-      if (group != kNoTexel && c >= clusterCount) shared += w;
+    pointHits(p, [&](uint32_t c, double w, uint32_t, bool farHit) {
+      if (group != kNoTexel && farHit) shared += w;
       else row.add(c, w);
     });
     if (shared > 0.0) row.add(sharedBase + group, shared);
@@ -518,8 +533,8 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     const uint32_t stride = uint32_t(std::clamp<uint64_t>(pooled / sharedRays, 1, m));
     for (uint32_t k = first; k < first + m; ++k) {
       const uint32_t rank = (k - first) % stride;
-      pointHits(groups.points[k], [&](uint32_t c, double w, uint32_t ray) {
-        if (c >= clusterCount && ray % stride == rank) row.add(c, w);
+      pointHits(groups.points[k], [&](uint32_t c, double w, uint32_t ray, bool farHit) {
+        if (farHit && ray % stride == rank) row.add(c, w);
       });
     }
   };

@@ -138,17 +138,16 @@ void Solver::gatherRows(const SparseLinks& links, glm::vec4* gathered) {
     for (size_t row = first; row < last; ++row) {
       const uint32_t begin = rowStart[row], end = rowStart[row + 1];
 #ifdef AFTERGLOW_SSE2
-      // The hot loop of a bounce, four links at a time: their weight codes converted together
-      // (through a store: broadcasting them from memory is cheaper than shuffling them out of
-      // a register), their targets cut out with scalar instructions (which run beside the
-      // vector ones), four accumulators (so the adds do not wait on each other), R padded to
-      // 16 bytes for aligned loads. (Prefetching R in software measured slower, and R in half
-      // floats no faster for the precision it loses.)
+      // The hot loop of a bounce, four links at a time (rows are padded to fours: no tail):
+      // their weight codes converted together (through a store: broadcasting them from memory
+      // is cheaper than shuffling them out of a register), their targets cut out with scalar
+      // instructions (which run beside the vector ones), four accumulators (so the adds do not
+      // wait on each other), R padded to 16 bytes for aligned loads. (Prefetching R in
+      // software measured slower, and R in half floats no faster for the precision it loses.)
       const __m128i bitsV = _mm_cvtsi32_si128(int(bits));
       alignas(16) float w[4];
       __m128 a0 = _mm_setzero_ps(), a1 = a0, a2 = a0, a3 = a0;
-      uint32_t k = begin;
-      for (; k + 4 <= end; k += 4) {
+      for (uint32_t k = begin; k < end; k += kLinkGroup) {
         const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(link + k));
         _mm_store_ps(w, _mm_cvtepi32_ps(_mm_srl_epi32(v, bitsV)));
         uint64_t lo, hi;
@@ -161,9 +160,6 @@ void Solver::gatherRows(const SparseLinks& links, glm::vec4* gathered) {
         a2 = _mm_add_ps(a2, _mm_mul_ps(_mm_set1_ps(w[2]), _mm_load_ps(&r[t2].x)));
         a3 = _mm_add_ps(a3, _mm_mul_ps(_mm_set1_ps(w[3]), _mm_load_ps(&r[t3].x)));
       }
-      for (; k < end; ++k)
-        a0 = _mm_add_ps(a0, _mm_mul_ps(_mm_set1_ps(float(link[k] >> bits)),
-                                       _mm_load_ps(&r[link[k] & mask].x)));
       const __m128 sum = _mm_add_ps(_mm_add_ps(a0, a1), _mm_add_ps(a2, a3));
       _mm_store_ps(&gathered[row].x, _mm_mul_ps(sum, _mm_set1_ps(rowScale[row])));
 #else

@@ -67,7 +67,16 @@ void SparseLinks::appendRow(const uint32_t* targets, const float* weights, size_
   // The scale that keeps the row's sum (its energy): the codes' rounding errors, and weights
   // too small for a code, go to every link in proportion instead of being lost.
   rowScale.push_back(codes > 0 ? float(total / double(codes)) : 0.0f);
+  const size_t length = link.size() - rowStart.back();
+  if (length % kLinkGroup != 0)
+    link.resize(link.size() + kLinkGroup - length % kLinkGroup, link.back() & targetMask());
   rowStart.push_back(uint32_t(link.size()));
+}
+
+size_t SparseLinks::linkCount() const {
+  size_t n = 0;
+  for (uint32_t entry : link) n += isPadding(entry, targetBits) ? 0 : 1;
+  return n;
 }
 
 uint16_t floatToHalf(float value) {
@@ -173,6 +182,12 @@ bool checkLinks(const SparseLinks& m, size_t rows, size_t targets, const char* n
   }
   // The rows' shape here; their targets (the low bits of each link) below.
   if (!checkRows(m.rowStart, m.link, rows, SIZE_MAX, name, why)) return false;
+  for (size_t r = 0; r < rows; ++r)
+    if ((m.rowStart[r + 1] - m.rowStart[r]) % kLinkGroup != 0) {
+      why << name << ": row " << r << " holds " << m.rowStart[r + 1] - m.rowStart[r]
+          << " entries, not a multiple of " << kLinkGroup;
+      return false;
+    }
   for (size_t k = 0; k < m.size(); ++k)
     if (m.targetAt(k) >= targets) {
       why << name << ": entry " << k << " refers to " << m.targetAt(k) << " of " << targets;

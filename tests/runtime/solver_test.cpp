@@ -231,5 +231,58 @@ TEST(RuntimeSolver, QuantisedRowsKeepTheirSums) {
   }
 }
 
+TEST(RuntimeSolver, LinkRowsArePaddedToFoursWithWeightlessEntries) {
+  // Rows of 0 to 9 links: each stored as a multiple of four entries, the padding weightless
+  // and aimed at the row's last target, and the bounce gathers exactly the weighted sum.
+  SparseLinks m(64);
+  size_t links = 0;
+  for (uint32_t n = 0; n < 10; ++n) {
+    std::vector<uint32_t> targets;
+    std::vector<float> weights;
+    for (uint32_t k = 0; k < n; ++k) targets.push_back(3 * k + n), weights.push_back(0.01f * float(k + 1));
+    m.appendRow(targets.data(), weights.data(), n);
+    links += n;
+    const uint32_t begin = m.rowStart[n], end = m.rowStart[n + 1];
+    EXPECT_EQ(end - begin, (n + 3) / 4 * 4) << n << " links";
+    for (uint32_t k = begin + n; k < end; ++k) {
+      EXPECT_TRUE(SparseLinks::isPadding(m.link[k], m.targetBits));
+      EXPECT_EQ(m.weightAt(n, k), 0.0f);
+      EXPECT_EQ(m.targetAt(k), targets.back());
+    }
+  }
+  EXPECT_EQ(m.linkCount(), links);
+
+  // Through a bounce: row r of a 64-cluster transport whose clusters reflect 1 + c.
+  const uint32_t clusters = 64;
+  TransportData d;
+  d.clusterCount = clusters;
+  d.gatherPointCount = uint32_t(m.rows());
+  d.texelCount = d.gatherPointCount;
+  d.materials.push_back({"grey", glm::vec3(1.0f), glm::vec3(0.0f)});
+  d.clusterMaterial.assign(clusters, 0);
+  d.clusterAlbedoTexture.assign(clusters, glm::vec3(1.0f));
+  d.clusterEmissionTexture.assign(clusters, glm::vec3(1.0f));
+  Source light;
+  light.name = "light";
+  light.texelTransfer.assign(d.texelCount, 0.0f);
+  for (uint32_t c = 0; c < clusters; ++c) light.clusterTransfer.push_back(1.0f + float(c));
+  d.sources.push_back(light);
+  d.links = m;
+  const float one = 1.0f;
+  for (uint32_t c = 0; c < clusters; ++c) d.clusterGather.appendRow(nullptr, nullptr, 0);
+  for (uint32_t t = 0; t < d.texelCount; ++t) d.texelGather.appendRow(&t, &one, 1);
+  ASSERT_EQ(d.validate(), "");
+  Solver solver(d);
+  solver.solve({1, 0.0f});  // one pass: R = direct, then every row gathers it
+  std::vector<glm::vec3> direct, indirect;
+  solver.gatherTexels(direct, indirect);
+  for (uint32_t r = 0; r < m.rows(); ++r) {
+    double want = 0.0;
+    for (uint32_t k = m.rowStart[r]; k < m.rowStart[r + 1]; ++k)
+      want += double(m.weightAt(r, k)) * (1.0 + double(m.targetAt(k)));
+    EXPECT_NEAR(indirect[r].x, want, 1e-6 * want + 1e-12) << "row " << r;
+  }
+}
+
 }  // namespace
 }  // namespace afterglow::runtime

@@ -607,6 +607,19 @@ TEST(TransportFile, BadIndicesAreRefusedByValidate) {
     EXPECT_EQ(error.rfind("section 'LINK': links: entry ", 0), 0u) << error;
   }
   {
+    // A row of links the bounce would read past: not padded to kLinkGroup.
+    TransportData d = good;
+    size_t r = d.links.rows();
+    while (r > 0 && d.links.rowStart[r] == d.links.rowStart[r - 1]) --r;
+    ASSERT_GT(r, 0u);
+    --r;
+    const uint32_t length = d.links.rowStart[r + 1] - d.links.rowStart[r];
+    d.links.link.erase(d.links.link.begin() + d.links.rowStart[r + 1] - 1);
+    for (size_t j = r + 1; j < d.links.rowStart.size(); ++j) --d.links.rowStart[j];
+    EXPECT_EQ(errorOf(d), "section 'LINK': links: row " + std::to_string(r) + " holds " +
+                              std::to_string(length - 1) + " entries, not a multiple of 4");
+  }
+  {
     TransportData d = good;
     ASSERT_FALSE(d.sharedFar.link.empty());
     // A shared far field of shared far fields.

@@ -1,7 +1,7 @@
 // The transport file (OUT/transport.agt): TransportData on disk, written by the bake and loaded
 // by engines. GLM and the standard library only, like the rest of the runtime.
 //
-// Format, version 3. Everything is little-endian; floats are IEEE binary32, halves binary16.
+// Format, version 4. Everything is little-endian; floats are IEEE binary32, halves binary16.
 //
 //   header (40 bytes, at 0)
 //     0  char[8]  magic "AGLOWTR\0"
@@ -25,7 +25,7 @@
 //              8 bytes of padding, then the elements packed: every array's data starts 16-byte
 //              aligned in the file, so it can be memcpy'd in one go (or used in place).
 //
-// Sections of version 3 (all required; any other id is skipped, so a later writer of the same
+// Sections of version 4 (all required; any other id is skipped, so a later writer of the same
 // version may add sections that older readers ignore). "count" is the table's element count,
 // which the reader checks against the payload.
 //   INFO  count 1: u32 texelCount, u32 clusterCount, u32 gatherPointCount, i32 filterPasses,
@@ -43,7 +43,8 @@
 //   SFAR  count = shared far fields: u32 targetBits, arrays u32 rowStart, u32 link, f32
 //         rowScale (as LINK; targets are clusters and far clusters)
 //   LINK  count = rows: u32 targetBits, arrays u32 rowStart, u32 link, f32 rowScale (a link
-//         packs target | weight code << targetBits: see SparseLinks)
+//         packs target | weight code << targetBits: see SparseLinks; every row holds a
+//         multiple of kLinkGroup entries, padded with code 0)
 //   CGAT  count = rows: cluster gather, arrays u32 rowStart, u32 column, f32 weight
 //   GMAP  count = texels: arrays u32 texelPoint, u8 texelNeighbours (the source of the gather
 //         point filter and the texel gather, which the reader rebuilds: buildGatherMaps)
@@ -69,8 +70,9 @@
 
 namespace afterglow::runtime {
 
-// 2: 4-byte links, far clusters, gather map source; 3: shared far fields
-constexpr uint32_t kTransportVersion = 3;
+// 2: 4-byte links, far clusters, gather map source; 3: shared far fields; 4: link rows padded
+// to fours
+constexpr uint32_t kTransportVersion = 4;
 constexpr char kTransportMagic[8] = {'A', 'G', 'L', 'O', 'W', 'T', 'R', '\0'};
 constexpr uint32_t kTransportHeaderSize = 40;
 
