@@ -131,6 +131,34 @@ TEST(BakerRayTracer, FloorHitFromAboveIsExactAndFrontFacing) {
   EXPECT_FALSE(tracer->intersect(late).valid());
 }
 
+// The lightmap UVs kept per triangle corner (for the gather's one-line lookups) interpolate
+// to what uv(hit, 1) gives from the vertices, and are absent without TEXCOORD_1.
+TEST(BakerRayTracer, LightmapUvsPerTriangleMatchTheVertexUvs) {
+  Scene scene;
+  scenes::Primitive quad = floorQuad();
+  ASSERT_TRUE(quad.uv1.empty());
+  addInstance(scene, addMesh(scene, {quad}));
+  for (glm::vec2& uv : quad.uv0) quad.uv1.push_back(glm::vec2(0.1f) + 0.5f * glm::vec2(uv.y, uv.x));
+  addInstance(scene, addMesh(scene, {quad}), glm::translate(glm::mat4(1.0f), {4.0f, 0.0f, 0.0f}));
+  auto tracer = buildOrDie(scene);
+  ASSERT_TRUE(tracer);
+  const Hit bare = tracer->intersect(down(0.25f, 0.75f));
+  ASSERT_TRUE(bare.valid());
+  EXPECT_EQ(tracer->lightmapUvs(bare), nullptr);
+  EXPECT_EQ(tracer->lightmapUvs(Hit{}), nullptr);
+  for (glm::vec2 p : {glm::vec2(4.25f, 0.75f), glm::vec2(4.8f, 0.1f), glm::vec2(4.5f, 0.5f)}) {
+    const Hit hit = tracer->intersect(down(p.x, p.y));
+    ASSERT_TRUE(hit.valid());
+    const glm::vec2* corners = tracer->lightmapUvs(hit);
+    ASSERT_NE(corners, nullptr);
+    const glm::vec2 uv = RayTracer::mixCorners(corners, hit);
+    EXPECT_EQ(uv, tracer->uv(hit, 1));
+    // The quad's uv0 is its (x, z) in [0, 1]; uv1 swaps them, halves them and adds 0.1.
+    EXPECT_NEAR(uv.x, 0.1f + 0.5f * (p.y), 1e-6f);
+    EXPECT_NEAR(uv.y, 0.1f + 0.5f * (p.x - 4.0f), 1e-6f);
+  }
+}
+
 TEST(BakerRayTracer, FloorHitFromBelowIsBackFace) {
   Scene scene;
   addInstance(scene, addMesh(scene, {floorQuad()}));

@@ -102,18 +102,22 @@ class TexelLookup {
 // of the same chart that the hit point does see stands in; with none, the ray is absorbed.
 // Only texels near other geometry (TexelLookup::kNear) are checked. In two steps, so that a
 // batch's sight lines are traced together: sightLine() gives the line from the hit point to
-// its texel's sample, and standIn() searches the neighbours when that line is blocked.
+// its texel's sample, and standIn() searches the neighbours when that line is blocked. The hit
+// point is the ray's origin + t × direction: within micrometres of the surface, which the lift
+// off it (texel t's offset, millimetres or more) dwarfs, and without the triangle's vertices
+// to fetch.
 struct TexelOfHit {
   // The line from the hit point (lifted off the surface by texel t's offset) to the sample of
   // texel `target` on the side the ray arrived at; false when the two coincide (nothing can
   // stand between them).
-  static bool sightLine(const RayTracer& tracer, const TexelSet& texels, uint32_t t,
-                        const Hit& hit, uint32_t target, Ray& ray) {
-    const glm::vec3 d = (hit.frontFace ? texels.position[target] : texels.backPosition(target)) -
-                        from(tracer, texels, t, hit);
+  static bool sightLine(const TexelSet& texels, uint32_t t, const Hit& hit, glm::vec3 hitPoint,
+                        uint32_t target, Ray& ray) {
+    const glm::vec3 origin = from(texels, t, hit, hitPoint);
+    const glm::vec3 d =
+        (hit.frontFace ? texels.position[target] : texels.backPosition(target)) - origin;
     const float length = glm::length(d);
     if (!(length > 0.0f)) return false;
-    ray.origin = from(tracer, texels, t, hit);
+    ray.origin = origin;
     ray.direction = d / length;
     ray.tfar = length;
     return true;
@@ -121,11 +125,11 @@ struct TexelOfHit {
 
   // The nearest valid neighbour of t in its chart that the hit point sees, or kNoTexel.
   static uint32_t standIn(const RayTracer& tracer, const TexelSet& texels, uint32_t t,
-                          const Hit& hit) {
-    const glm::vec3 origin = from(tracer, texels, t, hit);
+                          const Hit& hit, glm::vec3 hitPoint) {
+    const glm::vec3 origin = from(texels, t, hit, hitPoint);
     auto sees = [&](uint32_t candidate) {
       Ray ray;
-      return !sightLine(tracer, texels, t, hit, candidate, ray) || !tracer.occluded(ray);
+      return !sightLine(texels, t, hit, hitPoint, candidate, ray) || !tracer.occluded(ray);
     };
     const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
     const int x = texels.pixel[t].x, y = texels.pixel[t].y;
@@ -149,10 +153,9 @@ struct TexelOfHit {
   }
 
  private:
-  static glm::vec3 from(const RayTracer& tracer, const TexelSet& texels, uint32_t t,
-                        const Hit& hit) {
+  static glm::vec3 from(const TexelSet& texels, uint32_t t, const Hit& hit, glm::vec3 hitPoint) {
     const glm::vec3 side = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
-    return tracer.position(hit) + side * texels.offset[t];
+    return hitPoint + side * texels.offset[t];
   }
 };
 
@@ -195,21 +198,29 @@ class GatherBatch {
     tracer.intersect(rays_.data() + first, hits_.data() + first, count);
     if (!lookup) return;
     const scenes::Scene& scene = tracer.scene();
-    // First the table entries of every hit that lands on a lit surface, prefetched, then the
-    // texels: one cache miss's latency for the batch instead of one per hit.
+    // Each step's memory for every hit of the batch first, prefetched, then the next step's:
+    // one cache miss's latency for the batch instead of one per hit. The lightmap UVs of every
+    // hit on a lit surface, then their table entries, then the texels.
     uvs_.resize(rays_.size());
+    corners_.assign(rays_.size(), nullptr);
     slots_.assign(rays_.size(), nullptr);
     lit_.assign(rays_.size(), 0);
     for (size_t k = first; k < rays_.size(); ++k) {
       const Hit& hit = hits_[k];
       if (!lit(scene, tracer, hit)) continue;
       lit_[k] = 1;
-      uvs_[k] = tracer.uv(hit, 1);
+      corners_[k] = tracer.lightmapUvs(hit);
+      if (corners_[k]) __builtin_prefetch(corners_[k]);
+    }
+    for (size_t k = first; k < rays_.size(); ++k) {
+      if (!lit_[k]) continue;
+      const Hit& hit = hits_[k];
+      uvs_[k] = corners_[k] ? RayTracer::mixCorners(corners_[k], hit) : tracer.uv(hit, 1);
       slots_[k] = lookup->slot(scene, hit.instance, uvs_[k]);
       if (slots_[k]) __builtin_prefetch(slots_[k]);
     }
-    // The texels hit; those near other geometry first have their sight lines traced, all
-    // together (TexelOfHit).
+    // The texels hit; those near other geometry (their samples and offsets prefetched) first
+    // have their sight lines traced, all together (TexelOfHit).
     sightRays_.clear();
     sightOf_.clear();
     auto code = [&](size_t k, uint32_t t) {
@@ -218,30 +229,38 @@ class GatherBatch {
     };
     for (size_t k = first; k < rays_.size(); ++k) {
       if (!lit_[k]) continue;
-      const Hit& hit = hits_[k];
-      const uint32_t entry = lookup->resolve(scene, hit.instance, uvs_[k], slots_[k]);
+      const uint32_t entry = lookup->resolve(scene, hits_[k].instance, uvs_[k], slots_[k]);
       if (entry == runtime::kNoTexel || !(entry & TexelLookup::kNear)) {
         code(k, entry);
         continue;
       }
       const uint32_t t = entry & ~TexelLookup::kNear;
-      Ray& sight = sightRays_.emplace_back();
-      if (TexelOfHit::sightLine(tracer, texels, t, hit, t, sight)) {
-        sightOf_.push_back({uint32_t(k), t});
-      } else {
-        sightRays_.pop_back();
-        code(k, t);
-      }
+      __builtin_prefetch(&texels.position[t]);
+      __builtin_prefetch(&texels.offset[t]);
+      sightOf_.push_back({uint32_t(k), t});
     }
-    if (sightRays_.empty()) return;
-    if (blockedSize_ < sightRays_.size()) {
-      blockedSize_ = sightRays_.size();
-      blocked_.reset(new bool[blockedSize_]);
-    }
-    tracer.occluded(sightRays_.data(), blocked_.get(), sightRays_.size());
+    size_t lines = 0;
+    sightRays_.resize(sightOf_.size());  // fresh rays (cleared above)
     for (size_t i = 0; i < sightOf_.size(); ++i) {
       const auto [k, t] = sightOf_[i];
-      code(k, blocked_[i] ? TexelOfHit::standIn(tracer, texels, t, hits_[k]) : t);
+      const Hit& hit = hits_[k];
+      const glm::vec3 hitPoint = rays_[k].origin + hit.t * rays_[k].direction;
+      if (TexelOfHit::sightLine(texels, t, hit, hitPoint, t, sightRays_[lines]))
+        sightOf_[lines++] = sightOf_[i];
+      else
+        code(k, t);
+    }
+    sightOf_.resize(lines);
+    if (lines == 0) return;
+    if (blockedSize_ < lines) {
+      blockedSize_ = lines;
+      blocked_.reset(new bool[blockedSize_]);
+    }
+    tracer.occluded(sightRays_.data(), blocked_.get(), lines);
+    for (size_t i = 0; i < lines; ++i) {
+      const auto [k, t] = sightOf_[i];
+      const glm::vec3 hitPoint = rays_[k].origin + hits_[k].t * rays_[k].direction;
+      code(k, blocked_[i] ? TexelOfHit::standIn(tracer, texels, t, hits_[k], hitPoint) : t);
     }
   }
 
@@ -290,6 +309,7 @@ class GatherBatch {
   std::vector<Hit> hits_;
   std::vector<uint32_t> codes_;
   std::vector<glm::vec2> uvs_;
+  std::vector<const glm::vec2*> corners_;  // per hit, its triangle's lightmap UVs
   std::vector<const uint32_t*> slots_;
   std::vector<uint8_t> lit_;
   std::vector<Ray> sightRays_;                    // sight lines of hits on near texels

@@ -543,11 +543,12 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   const uint32_t clusterRays = uint32_t(options.clusterRays);
   const TexelLookup lookup(texels);
   transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0);
-  auto backRow = [&](uint32_t c, RowBuilder& row) {
+  // `batch` is the thread's own for this bake (its buffers reused from row to row, its
+  // per-geometry cache valid for this bake's tracer only).
+  auto backRow = [&](uint32_t c, RowBuilder& row, GatherBatch& batch) {
     const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
     const uint32_t m = last - first;
     const uint32_t count = uint32_t(std::min<uint64_t>(clusterRays, uint64_t(rays) * m));
-    thread_local GatherBatch batch;  // its buffers are reused from row to row
     batch.clear();
     const sampling::Rng::ItemSeed seed{sampling::Rng::itemSeed(sampling::Stream::ClusterLinks, c)};
     for (uint32_t s = 0; s < count; ++s) {
@@ -582,12 +583,17 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
         for (Link& l : links) l.weight = float(double(l.weight) / sum);
       },
       transport.sharedFar, 64);
+  struct RowState {
+    RowBuilder row;
+    GatherBatch batch;
+  };
   buildRows(
-      rowCount, uint32_t(targetCount), progress, [&] { return RowBuilder(uint32_t(targetCount)); },
-      [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
-        if (r < points) pointRow(uint32_t(r), row);
-        else backRow(backClusters[r - points], row);
-        row.finish(options.minWeight, links);
+      rowCount, uint32_t(targetCount), progress,
+      [&] { return RowState{RowBuilder(uint32_t(targetCount)), GatherBatch()}; },
+      [&](size_t r, RowState& state, std::vector<Link>& links) {
+        if (r < points) pointRow(uint32_t(r), state.row);
+        else backRow(backClusters[r - points], state.row, state.batch);
+        state.row.finish(options.minWeight, links);
       },
       // Small blocks: the back-side clusters at the end trace rays, the others don't.
       transport.links, 64);

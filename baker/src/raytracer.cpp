@@ -34,6 +34,10 @@ struct Geometry {
   const scenes::Texture* alphaTexture = nullptr;     // null: baseColorFactor.a alone
   const scenes::TextureRef* alphaRef = nullptr;
   const std::vector<glm::vec2>* alphaUv = nullptr;   // the UV set the texture reads
+  // TEXCOORD_1 at each triangle's corners, three in a row (empty without the set): a hit's
+  // lightmap UV in one cache line, where the index and vertex buffers cost two misses in a row
+  // (the gather looks up the texel of every hit).
+  std::vector<glm::vec2> lightmapUv;
 
   glm::vec3 vertex(uint32_t i) const {
     return glm::vec3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
@@ -258,6 +262,10 @@ Status RayTracer::Impl::addGeometry(uint32_t instanceIndex, uint32_t primitiveIn
   }
   g.vertices = vertices;
   g.indices = indices;
+  if (prim.uv1.size() == vertexCount) {
+    g.lightmapUv.resize(3 * triangles);
+    for (size_t i = 0; i < 3 * triangles; ++i) g.lightmapUv[i] = prim.uv1[indices[i]];
+  }
 
   rtcSetGeometryMask(geom, kMaskVisible | (inst.castShadows ? kMaskShadowCasters : 0u));
 
@@ -544,9 +552,16 @@ glm::vec3 RayTracer::shadingNormal(const Hit& hit) const {
   return n / length;
 }
 
+const glm::vec2* RayTracer::lightmapUvs(const Hit& hit) const {
+  if (!hit.valid()) return nullptr;
+  const Geometry& g = impl_->geometries[hit.geometry];
+  return g.lightmapUv.empty() ? nullptr : &g.lightmapUv[3 * size_t(hit.triangle)];
+}
+
 glm::vec2 RayTracer::uv(const Hit& hit, int set) const {
   if (!hit.valid()) return glm::vec2(0.0f);
   const Geometry& g = impl_->geometries[hit.geometry];
+  if (set == 1 && !g.lightmapUv.empty()) return mixCorners(&g.lightmapUv[3 * size_t(hit.triangle)], hit);
   const std::vector<glm::vec2>* uvs = set == 0   ? &g.source->uv0
                                       : set == 1 ? &g.source->uv1
                                                  : nullptr;

@@ -135,6 +135,13 @@ class RayTracer {
   glm::vec3 shadingNormal(const Hit& hit) const;
   // Interpolated UV of set 0 (TEXCOORD_0) or 1 (TEXCOORD_1); (0, 0) when the set is absent.
   glm::vec2 uv(const Hit& hit, int set) const;
+  // The hit triangle's lightmap UVs (TEXCOORD_1) at its three corners, next to each other (one
+  // cache line to prefetch), or nullptr without that set; mixCorners() interpolates them.
+  const glm::vec2* lightmapUvs(const Hit& hit) const;
+  static glm::vec2 mixCorners(const glm::vec2* corners, const Hit& hit) {
+    const float u = hit.barycentric.x, v = hit.barycentric.y;
+    return (1.0f - u - v) * corners[0] + u * corners[1] + v * corners[2];
+  }
   // World-space area of the hit triangle.
   float triangleArea(const Hit& hit) const;
   // The hit primitive's material (Scene::material, so the glTF default for -1); the baker reads
