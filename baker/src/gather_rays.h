@@ -243,9 +243,7 @@ class GatherBatch {
     sightRays_.resize(sightOf_.size());  // fresh rays (cleared above)
     for (size_t i = 0; i < sightOf_.size(); ++i) {
       const auto [k, t] = sightOf_[i];
-      const Hit& hit = hits_[k];
-      const glm::vec3 hitPoint = rays_[k].origin + hit.t * rays_[k].direction;
-      if (TexelOfHit::sightLine(texels, t, hit, hitPoint, t, sightRays_[lines]))
+      if (TexelOfHit::sightLine(texels, t, hits_[k], hitPoint(k), t, sightRays_[lines]))
         sightOf_[lines++] = sightOf_[i];
       else
         code(k, t);
@@ -259,8 +257,7 @@ class GatherBatch {
     tracer.occluded(sightRays_.data(), blocked_.get(), lines);
     for (size_t i = 0; i < lines; ++i) {
       const auto [k, t] = sightOf_[i];
-      const glm::vec3 hitPoint = rays_[k].origin + hits_[k].t * rays_[k].direction;
-      code(k, blocked_[i] ? TexelOfHit::standIn(tracer, texels, t, hits_[k], hitPoint) : t);
+      code(k, blocked_[i] ? TexelOfHit::standIn(tracer, texels, t, hits_[k], hitPoint(k)) : t);
     }
   }
 
@@ -285,6 +282,9 @@ class GatherBatch {
   }
 
  private:
+  // Where ray k hit (TexelOfHit: the ray's own arithmetic is close enough).
+  glm::vec3 hitPoint(size_t k) const { return rays_[k].origin + hits_[k].t * rays_[k].direction; }
+
   // What a hit's geometry is, per geometry looked up once (a hit's material and instance sit
   // behind several dependent loads): kStatic, and kBackReflects for double-sided materials.
   static constexpr uint8_t kStatic = 1, kBackReflects = 2, kUnknown = 0xff;

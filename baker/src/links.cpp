@@ -473,10 +473,10 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   for (uint32_t c = 0; c < clusterCount; ++c)
     if (clusters.back[c] && clusters.firstTexel[c] < clusters.firstTexel[c + 1]) backClusters.push_back(c);
 
-  // A gather point's rays pooled, visit(target, weight, ray index, far) per hit. Hits in the near field count
-  // over all the point's rays; hits beyond it were kept from the full sets only, and share
-  // what the near hits and the misses leave (a ratio estimate), so every row plus its misses
-  // sums to exactly 1 and a closed room neither gains nor loses light.
+  // A gather point's rays pooled, visit(target, weight, ray index, far hit) per hit. Hits in
+  // the near field count over all the point's rays; hits beyond it were kept from the full
+  // sets only, and share what the near hits and the misses leave (a ratio estimate), so every
+  // row plus its misses sums to exactly 1 and a closed room neither gains nor loses light.
   auto pointHits = [&](uint32_t p, auto&& visit) {
     uint32_t all = 0, near = 0, misses = 0, farFull = 0;
     for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
