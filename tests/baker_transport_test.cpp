@@ -153,6 +153,13 @@ Status gatherAndLink(const Scene& scene, const RayTracer& tracer, TexelSet& texe
                       nullProgress(), farLevels);
 }
 
+// Two sets of links alike bit for bit: rows, links (targets and codes) and row scales.
+void expectSameLinks(const runtime::SparseLinks& a, const runtime::SparseLinks& b) {
+  EXPECT_EQ(a.rowStart, b.rowStart);
+  EXPECT_EQ(a.link, b.link);
+  EXPECT_EQ(a.rowScale, b.rowScale);
+}
+
 float rowSum(const runtime::SparseLinks& links, size_t row) {
   float sum = 0.0f;
   for (uint32_t k = links.rowStart[row]; k < links.rowStart[row + 1]; ++k)
@@ -297,9 +304,7 @@ TEST(BakerTransport, LinksAndDirectAreIndependentOfThreadCount) {
   }
   EXPECT_GT(one.sources[1].texelTransfer[0], 0.0f);
   EXPECT_EQ(one.gatherPointCount, two.gatherPointCount);
-  EXPECT_EQ(one.links.rowStart, two.links.rowStart);
-  EXPECT_EQ(one.links.link, two.links.link);
-  EXPECT_EQ(one.links.rowScale, two.links.rowScale);
+  expectSameLinks(one.links, two.links);
   for (auto m : {&runtime::TransportData::clusterGather, &runtime::TransportData::pointFilter,
                  &runtime::TransportData::texelGather}) {
     EXPECT_EQ((one.*m).rowStart, (two.*m).rowStart);
@@ -430,6 +435,13 @@ FurnaceClusters clusterFurnaceBox(const FurnaceBox& box) {
   return out;
 }
 
+Status gatherAndLink(FurnaceBox& box, const Clusters& clusters, const LinkOptions& options,
+                     runtime::TransportData& data, std::vector<uint32_t>* pointOfTexel = nullptr,
+                     const std::vector<Clusters>& farLevels = {}) {
+  return gatherAndLink(box.scene, *box.tracer, box.texels, clusters, options, data, pointOfTexel,
+                       farLevels);
+}
+
 // Direct light from the box's emissive walls, then the solve against Le / (1 − ρ).
 void expectLinkedFurnace(const FurnaceBox& box, const Clusters& clusters,
                          runtime::TransportData& data) {
@@ -517,9 +529,6 @@ TEST(BakerTransport, WhiteFurnaceThroughTexelsAndClusters) {
 TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
   FurnaceBox box;
   ASSERT_NO_FATAL_FAILURE(buildFurnaceBox(box));
-  const Scene& scene = box.scene;
-  const RayTracer& tracer = *box.tracer;
-  TexelSet& texels = box.texels;
   const FurnaceClusters clustered = clusterFurnaceBox(box);
   const Clusters& clusters = clustered.clusters;
   const std::vector<Clusters>& far = clustered.far;
@@ -530,8 +539,8 @@ TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
   lopt.sharedFarSpan = 0;   // (shared far fields: the next test)
   runtime::TransportData plain, data;
   std::vector<uint32_t> pointOf;
-  ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, lopt, plain).isOk());
-  ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, lopt, data, &pointOf, far).isOk());
+  ASSERT_TRUE(gatherAndLink(box, clusters, lopt, plain).isOk());
+  ASSERT_TRUE(gatherAndLink(box, clusters, lopt, data, &pointOf, far).isOk());
   ASSERT_GT(data.farClusters.rows(), 0u);
   size_t farLinks = 0;
   for (size_t k = 0; k < data.links.size(); ++k)
@@ -546,7 +555,7 @@ TEST(BakerTransport, WhiteFurnaceThroughFarClusters) {
     EXPECT_NEAR(sum, 1.0, 1e-5) << "far cluster " << f;
   }
   for (uint32_t t = 0; t < data.texelCount; ++t) {
-    if (!texels.valid[t]) continue;
+    if (!box.texels.valid[t]) continue;
     EXPECT_NEAR(rowSum(data.links, pointOf[t]), 1.0f, 2e-3f) << t;
   }
 
@@ -566,15 +575,11 @@ TEST(BakerTransport, FarClustersOfOneClusterLinkThatCluster) {
   lopt.farDistance = 1.0f;
   lopt.sharedFarSpan = 0;  // (sharing would pool the far hits)
   runtime::TransportData plain, data;
-  ASSERT_TRUE(gatherAndLink(box.scene, *box.tracer, box.texels, clusters, lopt, plain).isOk());
-  ASSERT_TRUE(gatherAndLink(box.scene, *box.tracer, box.texels, clusters, lopt, data, nullptr,
-                            {clusters})
-                  .isOk());
+  ASSERT_TRUE(gatherAndLink(box, clusters, lopt, plain).isOk());
+  ASSERT_TRUE(gatherAndLink(box, clusters, lopt, data, nullptr, {clusters}).isOk());
   EXPECT_EQ(data.farClusters.rows(), 0u);
   EXPECT_EQ(data.sharedFarBase(), data.clusterCount);
-  EXPECT_EQ(data.links.rowStart, plain.links.rowStart);
-  EXPECT_EQ(data.links.link, plain.links.link);
-  EXPECT_EQ(data.links.rowScale, plain.links.rowScale);
+  expectSameLinks(data.links, plain.links);
   expectLinkedFurnace(box, clusters, data);
 }
 
@@ -584,9 +589,6 @@ TEST(BakerTransport, FarClustersOfOneClusterLinkThatCluster) {
 TEST(BakerTransport, SharedFarFieldsKeepEachPointsFarShareAndTheFurnace) {
   FurnaceBox box;
   ASSERT_NO_FATAL_FAILURE(buildFurnaceBox(box));
-  const Scene& scene = box.scene;
-  const RayTracer& tracer = *box.tracer;
-  TexelSet& texels = box.texels;
   const FurnaceClusters clustered = clusterFurnaceBox(box);
   const Clusters& clusters = clustered.clusters;
   const std::vector<Clusters>& far = clustered.far;
@@ -597,9 +599,9 @@ TEST(BakerTransport, SharedFarFieldsKeepEachPointsFarShareAndTheFurnace) {
   lopt.sharedFarSpan = 0;
   runtime::TransportData own, data;
   std::vector<uint32_t> pointOf;
-  ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, lopt, own, &pointOf, far).isOk());
+  ASSERT_TRUE(gatherAndLink(box, clusters, lopt, own, &pointOf, far).isOk());
   lopt.sharedFarSpan = 4;
-  ASSERT_TRUE(gatherAndLink(scene, tracer, texels, clusters, lopt, data, nullptr, far).isOk());
+  ASSERT_TRUE(gatherAndLink(box, clusters, lopt, data, nullptr, far).isOk());
   ASSERT_EQ(own.sharedFar.rows(), 0u);
   ASSERT_GT(data.sharedFar.rows(), 0u);
   EXPECT_LT(double(data.linkCount()), 0.9 * double(own.linkCount()));
