@@ -50,8 +50,11 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
                           BakeResult& result, Progress& progress) {
   runtime::TransportData& tr = result.transport;
   auto cancelled = [&]() { return progress.cancelled(); };
+  uint64_t raysBefore = tracer.raysTraced();
   auto record = [&](const char* name, Clock::time_point t0) {
-    result.stages.push_back({name, secondsSince(t0)});
+    const uint64_t rays = tracer.raysTraced();
+    result.stages.push_back({name, secondsSince(t0), rays - raysBefore});
+    raysBefore = rays;
   };
   auto t0 = Clock::now();
   Result<TexelGather> gather = gatherTexels(scene, tracer, result.texels, options.links, progress);
@@ -141,8 +144,12 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
                         Progress& progress) {
   BakeResult result;
   auto cancelled = [&]() { return progress.cancelled(); };
+  const RayTracer* traced = nullptr;  // once built: a stage's rays are its count since the last
+  uint64_t raysBefore = 0;
   auto record = [&](const char* name, Clock::time_point t0) {
-    result.stages.push_back({name, secondsSince(t0)});
+    const uint64_t rays = traced ? traced->raysTraced() : 0;
+    result.stages.push_back({name, secondsSince(t0), rays - raysBefore});
+    raysBefore = rays;
   };
 
   // The sky first: a bad image path should fail before minutes of precompute.
@@ -160,6 +167,7 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
   progress.end();
   if (!built) return built.status();
   const RayTracer& tracer = *built.value();
+  traced = &tracer;
   record("raytracer", t0);
   const RayTracerStats& stats = tracer.stats();
   if (stats.invalidTriangles > 0)
@@ -204,6 +212,7 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
   } else {
     Status st = precomputeAndSolve(scene, tracer, options, sky, result, progress);
     if (!st) return st;
+    raysBefore = tracer.raysTraced();  // counted in the stages it recorded
   }
   if (cancelled()) return Status::error("cancelled");
 

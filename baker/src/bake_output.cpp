@@ -264,9 +264,11 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
     stages[s.name] = s.seconds;
     total += s.seconds;
   }
+  json stageRays = json::object();
   for (const StageTime& s : result.stages) {
     stages[s.name] = s.seconds;
     total += s.seconds;
+    if (s.rays > 0) stageRays[s.name] = s.rays;
   }
   stages["total"] = total;
   size_t lights = 0, emissive = 0;
@@ -284,6 +286,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   report["links"] = result.transport.linkCount();
   report["sources"] = {{"lights", lights}, {"emissiveMaterials", emissive}};
   report["raysTraced"] = result.raysTraced;
+  report["stageRays"] = stageRays;
   report["transport"] = transportInfo;
   report["stages"] = stages;
   report["peakMemoryBytes"] = peakMemoryBytes();

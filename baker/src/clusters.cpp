@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace afterglow::baker {
@@ -65,23 +66,31 @@ class GroupClusterer {
   }
 
   // Appends the clusters of `group` (texel indices, ascending) to `out`, each sorted.
-  void run(std::vector<uint32_t> group, std::vector<std::vector<uint32_t>>& out) {
-    std::vector<std::vector<uint32_t>> stack;
-    stack.push_back(std::move(group));
-    std::vector<std::vector<uint32_t>> leaves;
+  void run(std::vector<uint32_t> group, std::vector<std::vector<uint32_t>>& out) const {
+    // The k-d subdivision works on ranges of `group` in place, each split a stable partition
+    // (a node's texels keep their order), so a node costs no allocation of its own.
+    struct Range {
+      uint32_t begin, end;
+    };
+    std::vector<Range> stack{{0, uint32_t(group.size())}}, leafRanges;
+    Scratch scratch;
     while (!stack.empty()) {
-      std::vector<uint32_t> node = std::move(stack.back());
+      const Range node = stack.back();
       stack.pop_back();
-      std::vector<uint32_t> a, b;
-      if (split(node, a, b)) {
+      const uint32_t mid = node.begin + split(group.data() + node.begin, node.end - node.begin, scratch);
+      if (mid > node.begin) {
         // Second half first on the stack so the first half is finished first: the order of
         // the clusters follows the subdivision, whatever the thread count.
-        stack.push_back(std::move(b));
-        stack.push_back(std::move(a));
+        stack.push_back({mid, node.end});
+        stack.push_back({node.begin, mid});
       } else {
-        leaves.push_back(std::move(node));
+        leafRanges.push_back(node);
       }
     }
+    std::vector<std::vector<uint32_t>> leaves;
+    leaves.reserve(leafRanges.size());
+    for (const Range& r : leafRanges)
+      leaves.emplace_back(group.begin() + long(r.begin), group.begin() + long(r.end));
     // Leaves split further where a wall stands between their texels, then by normal cones.
     for (size_t i = 0; i < leaves.size(); ++i) {
       std::vector<uint32_t> hidden = separateHidden(leaves[i]);
@@ -112,27 +121,39 @@ class GroupClusterer {
       const double d = glm::length(glm::dvec3(positionOf(t)) - centre);
       if (d < best) best = d, seed = t;
     }
+    // The sight lines of the leaf traced together (packets: they share an origin).
+    std::vector<Ray> lines;
+    std::vector<uint32_t> lineOf(leaf.size(), kNoTexel);
+    for (size_t i = 0; i < leaf.size(); ++i) {
+      Ray line;
+      if (leaf[i] == seed || !sightLine(seed, leaf[i], line)) continue;
+      lineOf[i] = uint32_t(lines.size());
+      lines.push_back(line);
+    }
+    std::unique_ptr<bool[]> blocked(new bool[lines.size()]);
+    tracer_->occluded(lines.data(), blocked.get(), lines.size());
     std::vector<uint32_t> kept;
-    for (uint32_t t : leaf) {
-      if (t == seed || sees(seed, t)) kept.push_back(t);
-      else hidden.push_back(t);
+    for (size_t i = 0; i < leaf.size(); ++i) {
+      if (lineOf[i] == kNoTexel || !blocked[lineOf[i]]) kept.push_back(leaf[i]);
+      else hidden.push_back(leaf[i]);
     }
     leaf.swap(kept);
     return hidden;
   }
 
-  bool sees(uint32_t a, uint32_t b) const {
+  // The line from a's sample to b's, both lifted off the surface by a quarter of their
+  // distance; false when they coincide (b is then in sight).
+  bool sightLine(uint32_t a, uint32_t b, Ray& ray) const {
     const float lift = 0.25f * glm::length(positionOf(b) - positionOf(a));
     const glm::vec3 from = positionOf(a) + normalOf(a) * lift;
     const glm::vec3 to = positionOf(b) + normalOf(b) * lift;
     const glm::vec3 d = to - from;
     const float length = glm::length(d);
-    if (!(length > 0.0f)) return true;
-    Ray ray;
+    if (!(length > 0.0f)) return false;
     ray.origin = from;
     ray.direction = d / length;
     ray.tfar = length;
-    return !tracer_->occluded(ray);
+    return true;
   }
 
   float distanceOf(uint32_t t) const {
@@ -140,61 +161,94 @@ class GroupClusterer {
     return distance_[t];
   }
 
-  bool split(const std::vector<uint32_t>& node, std::vector<uint32_t>& a,
-             std::vector<uint32_t>& b) const {
-    const size_t minTexels = size_t(std::max(1, options_.minTexels));
-    if (node.size() < 2 * minTexels) return false;
+  // A split's working buffers, one set per run.
+  struct Scratch {
+    std::vector<float> values;
+    std::vector<uint32_t> moved;
+  };
+
+  // Moves the node's texels for which `first` holds to its front, keeping the order on both
+  // sides; returns how many there are.
+  template <class Pred>
+  static uint32_t partition(uint32_t* node, uint32_t n, Scratch& scratch, Pred&& first) {
+    scratch.moved.clear();
+    uint32_t kept = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      if (first(node[i])) node[kept++] = node[i];
+      else scratch.moved.push_back(node[i]);
+    }
+    std::copy(scratch.moved.begin(), scratch.moved.end(), node + kept);
+    return kept;
+  }
+
+  // Splits the node's n texels into two runs, in place; returns the length of the first, or 0
+  // when the node is a leaf.
+  uint32_t split(uint32_t* node, uint32_t n, Scratch& scratch) const {
+    const uint32_t minTexels = uint32_t(std::max(1, options_.minTexels));
+    if (n < 2 * minTexels) return 0;
     glm::vec3 lo(std::numeric_limits<float>::infinity()), hi(-lo);
-    for (uint32_t t : node) {
+    float low = std::numeric_limits<float>::infinity(), high = -low, edge = 0.0f;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t t = node[i];
       lo = glm::min(lo, texels_.position[t]);
       hi = glm::max(hi, texels_.position[t]);
+      const float d = distanceOf(t);
+      low = std::min(low, d);
+      high = std::max(high, d);
+      edge += texels_.edge[t];
     }
     const glm::vec3 extent = hi - lo;
     const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-    // Ray distances: the median bounds the size, the spread separates regions apart.
-    std::vector<float> d;
-    d.reserve(node.size());
-    for (uint32_t t : node) d.push_back(distanceOf(t));
-    const auto [minIt, maxIt] = std::minmax_element(d.begin(), d.end());
-    const float low = *minIt, high = *maxIt;
-    std::nth_element(d.begin(), d.begin() + long(d.size() / 2), d.end());
-    const float median = d[d.size() / 2];
+    // Ray distances: the spread separates regions apart, the median bounds the size.
     if (options_.maxDistanceRatio > 1.0f && std::isfinite(low) && low > 0.0f &&
         high > options_.maxDistanceRatio * low) {
       // Apart by ray distance, at the geometric mean of the two percentiles.
       const float cut = std::isfinite(high) ? std::sqrt(low * high) : low * options_.maxDistanceRatio;
-      for (uint32_t t : node) (distanceOf(t) < cut ? a : b).push_back(t);
-      if (a.size() >= minTexels && b.size() >= minTexels) return true;
-      a.clear();
-      b.clear();
+      uint32_t below = 0;
+      for (uint32_t i = 0; i < n; ++i) below += distanceOf(node[i]) < cut ? 1 : 0;
+      if (below >= minTexels && n - below >= minTexels)
+        return partition(node, n, scratch, [&](uint32_t t) { return distanceOf(t) < cut; });
     }
     float limit = options_.clusterSize > 0.0f ? options_.clusterSize : std::numeric_limits<float>::infinity();
-    if (options_.clusterTexels > 0.0f) {
-      float edge = 0.0f;
-      for (uint32_t t : node) edge += texels_.edge[t];
-      limit = std::min(limit, options_.clusterTexels * edge / float(node.size()));
+    if (options_.clusterTexels > 0.0f) limit = std::min(limit, options_.clusterTexels * edge / float(n));
+    // The median only matters when the node is within the other limits (most nodes are not:
+    // the subdivision starts from whole instances).
+    if (extent[axis] <= limit && options_.adaptiveScale > 0.0f && !distance_.empty()) {
+      std::vector<float>& d = scratch.values;
+      d.resize(n);
+      for (uint32_t i = 0; i < n; ++i) d[i] = distanceOf(node[i]);
+      std::nth_element(d.begin(), d.begin() + long(n / 2), d.end());
+      const float median = d[n / 2];
+      if (std::isfinite(median)) limit = std::min(limit, options_.adaptiveScale * median);
     }
-    if (options_.adaptiveScale > 0.0f && std::isfinite(median))
-      limit = std::min(limit, options_.adaptiveScale * median);
-    if (!(extent[axis] > limit)) return false;
+    if (!(extent[axis] > limit)) return 0;
     // At the middle of the box, moved into the 25th..75th percentile of the texels along the
-    // axis so neither half comes out tiny.
-    std::vector<float> coords;
-    coords.reserve(node.size());
-    for (uint32_t t : node) coords.push_back(texels_.position[t][axis]);
-    const long q1 = long(coords.size() / 4), q3 = long((coords.size() * 3) / 4);
-    std::nth_element(coords.begin(), coords.begin() + q1, coords.end());
-    const float first = coords[size_t(q1)];
-    std::nth_element(coords.begin() + q1, coords.begin() + q3, coords.end());
-    const float third = coords[size_t(q3)];
-    const float cut = std::clamp(0.5f * (lo[axis] + hi[axis]), first, third);
-    for (uint32_t t : node) (texels_.position[t][axis] < cut ? a : b).push_back(t);
-    if (a.size() < minTexels || b.size() < minTexels) {
-      // Many texels on the cut (a flat surface seen edge-on): halve by index instead.
-      a.assign(node.begin(), node.begin() + long(node.size() / 2));
-      b.assign(node.begin() + long(node.size() / 2), node.end());
+    // axis so neither half comes out tiny. The middle lies below the 25th percentile exactly
+    // when at most n/4 texels are at or below it (and above the 75th when more than 3n/4 are
+    // below it), so the percentiles are only looked for when the middle is outside them.
+    const uint32_t q1 = n / 4, q3 = (n * 3) / 4;
+    float cut = 0.5f * (lo[axis] + hi[axis]);
+    uint32_t atOrBelow = 0, below = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      const float x = texels_.position[node[i]][axis];
+      atOrBelow += x <= cut ? 1 : 0;
+      below += x < cut ? 1 : 0;
     }
-    return true;
+    if (atOrBelow <= q1 || below > q3) {
+      std::vector<float>& coords = scratch.values;
+      coords.resize(n);
+      for (uint32_t i = 0; i < n; ++i) coords[i] = texels_.position[node[i]][axis];
+      std::nth_element(coords.begin(), coords.begin() + long(q1), coords.end());
+      const float first = coords[q1];
+      std::nth_element(coords.begin() + long(q1), coords.begin() + long(q3), coords.end());
+      cut = std::clamp(cut, first, coords[q3]);
+      below = 0;
+      for (uint32_t i = 0; i < n; ++i) below += texels_.position[node[i]][axis] < cut ? 1 : 0;
+    }
+    // Many texels on the cut (a flat surface seen edge-on): halve by index instead.
+    if (below < minTexels || n - below < minTexels) return n / 2;
+    return partition(node, n, scratch,
+                     [&](uint32_t t) { return texels_.position[t][axis] < cut; });
   }
 
   // Greedy normal cones seeded by the lowest remaining texel; a cone smaller than minTexels
@@ -282,19 +336,21 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
   clusters.texelBackCluster.assign(count, kNoTexel);
   clusters.firstTexel.push_back(0);
 
-  // Valid texels sorted by (instance, material, index).
-  std::vector<uint32_t> order;
+  // Valid texels sorted by (instance, material, index): one key per texel, sorted stably
+  // (texels come mostly in order already).
   std::vector<uint32_t> material(count, 0);
-  for (uint32_t t = 0; t < count; ++t) {
-    if (!texels.valid[t]) continue;
-    order.push_back(t);
-    material[t] = uint32_t(texelMaterial(scene, texels, t));
-  }
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    if (texels.instance[a] != texels.instance[b]) return texels.instance[a] < texels.instance[b];
-    if (material[a] != material[b]) return material[a] < material[b];
-    return a < b;
-  });
+  parallelFor(count, [&](size_t t) {
+    if (texels.valid[t]) material[t] = uint32_t(texelMaterial(scene, texels, uint32_t(t)));
+  }, 4096);
+  std::vector<std::pair<uint64_t, uint32_t>> keyed;
+  for (uint32_t t = 0; t < count; ++t)
+    if (texels.valid[t]) keyed.push_back({(uint64_t(texels.instance[t]) << 32) | material[t], t});
+  if (!std::is_sorted(keyed.begin(), keyed.end()))
+    std::stable_sort(keyed.begin(), keyed.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<uint32_t> order(keyed.size());
+  for (size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
+  keyed = {};
 
   // Front sides of every group, then the back sides of the double-sided ones.
   const std::vector<float> none;
@@ -310,35 +366,67 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
     groups.emplace_back(begin, end);
     begin = end;
   }
-  auto partition = [&](const std::vector<float>& distance, bool backs) {
-    GroupClusterer clusterer(texels, tracer, backs, distance.size() == count ? distance : none,
-                             options);
-    std::vector<std::vector<std::vector<uint32_t>>> perGroup(groups.size());
-    const bool seenOnly = gather && gather->backSeen.size() == count;
-    parallelFor(groups.size(), [&](size_t g) {
-      const auto [begin, end] = groups[g];
-      std::vector<uint32_t> members(order.begin() + long(begin), order.begin() + long(end));
-      if (backs) {
-        if (!scene.material(int(int32_t(material[order[begin]]))).doubleSided) return;
-        if (seenOnly)
-          members.erase(std::remove_if(members.begin(), members.end(),
-                                       [&](uint32_t t) { return !gather->backSeen[t]; }),
-                        members.end());
-      }
-      if (!members.empty()) clusterer.run(std::move(members), perGroup[g]);
-    }, 1);
-    std::vector<std::vector<uint32_t>> found;
-    for (auto& list : perGroup)
-      for (auto& cluster : list) found.push_back(std::move(cluster));
-    return found;
+  // Every group's front side and, for double-sided groups, its back side, as tasks of one
+  // parallel loop (two loops would leave a thread idle at the end of each), largest first.
+  const std::vector<float>& frontDistance =
+      gather && gather->harmonicDistance.size() == count ? gather->harmonicDistance : none;
+  const std::vector<float>& backDistance =
+      gather && gather->backHarmonicDistance.size() == count ? gather->backHarmonicDistance : none;
+  const GroupClusterer frontClusterer(texels, tracer, false, frontDistance, options);
+  const GroupClusterer backClusterer(texels, tracer, true, backDistance, options);
+  const bool seenOnly = gather && gather->backSeen.size() == count;
+  std::vector<std::vector<std::vector<uint32_t>>> perTask(2 * groups.size());  // fronts, backs
+  std::vector<size_t> tasks(perTask.size());
+  for (size_t i = 0; i < tasks.size(); ++i) tasks[i] = i;
+  auto texelsOf = [&](size_t task) {
+    const auto [begin, end] = groups[task % groups.size()];
+    return end - begin;
   };
-  const std::vector<std::vector<uint32_t>> fronts =
-      partition(gather ? gather->harmonicDistance : none, false);
-  const std::vector<std::vector<uint32_t>> backs =
-      partition(gather ? gather->backHarmonicDistance : none, true);
+  std::stable_sort(tasks.begin(), tasks.end(), [&](size_t a, size_t b) { return texelsOf(a) > texelsOf(b); });
+  parallelFor(tasks.size(), [&](size_t i) {
+    const size_t task = tasks[i], g = task % groups.size();
+    const bool back = task >= groups.size();
+    const auto [begin, end] = groups[g];
+    if (back && !scene.material(int(int32_t(material[order[begin]]))).doubleSided) return;
+    std::vector<uint32_t> members(order.begin() + long(begin), order.begin() + long(end));
+    if (back && seenOnly)
+      members.erase(std::remove_if(members.begin(), members.end(),
+                                   [&](uint32_t t) { return !gather->backSeen[t]; }),
+                    members.end());
+    if (!members.empty()) (back ? backClusterer : frontClusterer).run(std::move(members), perTask[task]);
+  }, 1);
+  // Concatenated in group order, so the result does not depend on the thread count.
+  std::vector<std::vector<uint32_t>> fronts, backs;
+  for (size_t task = 0; task < perTask.size(); ++task)
+    for (auto& cluster : perTask[task])
+      (task < groups.size() ? fronts : backs).push_back(std::move(cluster));
 
-  auto emit = [&](const std::vector<uint32_t>& members, bool back) {
-    const uint32_t c = clusters.size();
+  // Numbered fronts then backs, in group order; the per-cluster means in parallel (each
+  // cluster summed in its own texel order, so the result does not depend on the thread count).
+  const size_t total = fronts.size() + backs.size();
+  auto membersOf = [&](size_t c) -> const std::vector<uint32_t>& {
+    return c < fronts.size() ? fronts[c] : backs[c - fronts.size()];
+  };
+  clusters.firstTexel.resize(total + 1);
+  for (size_t c = 0; c < total; ++c) {
+    const std::vector<uint32_t>& members = membersOf(c);
+    const bool back = c >= fronts.size();
+    for (uint32_t t : members) {
+      (back ? clusters.texelBackCluster : clusters.texelCluster)[t] = uint32_t(c);
+      clusters.memberTexels.push_back(t);
+    }
+    clusters.firstTexel[c + 1] = uint32_t(clusters.memberTexels.size());
+  }
+  clusters.position.resize(total);
+  clusters.normal.resize(total);
+  clusters.area.resize(total);
+  clusters.material.resize(total);
+  clusters.albedo.resize(total);
+  clusters.emission.resize(total);
+  clusters.back.resize(total);
+  parallelFor(total, [&](size_t c) {
+    const std::vector<uint32_t>& members = membersOf(c);
+    const bool back = c >= fronts.size();
     double area = 0.0;
     glm::dvec3 position(0.0), normal(0.0), albedo(0.0), emission(0.0), plainPosition(0.0),
         plainNormal(0.0);
@@ -352,30 +440,25 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
       plainNormal += glm::dvec3(texels.normal[t]);
       albedo += a * glm::dvec3(diffuseAlbedo(scene, mat, texels.uv0[t]));
       emission += a * glm::dvec3(emittedRadiance(scene, mat, texels.uv0[t]));
-      (back ? clusters.texelBackCluster : clusters.texelCluster)[t] = c;
-      clusters.memberTexels.push_back(t);
     }
     const double n = double(members.size());
     const bool weighted = area > 0.0;
-    clusters.position.push_back(glm::vec3(weighted ? position / area : plainPosition / n));
+    clusters.position[c] = glm::vec3(weighted ? position / area : plainPosition / n);
     if (!(glm::length(normal) > 0.0)) normal = plainNormal;
     const double length = glm::length(normal);
-    glm::vec3 unit = length > 0.0 ? glm::vec3(normal / length) : texels.normal[members.front()];
-    clusters.normal.push_back(back ? -unit : unit);
-    clusters.area.push_back(float(area));
-    clusters.material.push_back(material[members.front()]);
+    const glm::vec3 unit = length > 0.0 ? glm::vec3(normal / length) : texels.normal[members.front()];
+    clusters.normal[c] = back ? -unit : unit;
+    clusters.area[c] = float(area);
+    clusters.material[c] = material[members.front()];
     if (weighted) {
-      clusters.albedo.push_back(glm::vec3(albedo / area));
-      clusters.emission.push_back(glm::vec3(emission / area));
+      clusters.albedo[c] = glm::vec3(albedo / area);
+      clusters.emission[c] = glm::vec3(emission / area);
     } else {
-      clusters.albedo.push_back(diffuseAlbedo(scene, mat, texels.uv0[members.front()]));
-      clusters.emission.push_back(emittedRadiance(scene, mat, texels.uv0[members.front()]));
+      clusters.albedo[c] = diffuseAlbedo(scene, mat, texels.uv0[members.front()]);
+      clusters.emission[c] = emittedRadiance(scene, mat, texels.uv0[members.front()]);
     }
-    clusters.back.push_back(back ? 1 : 0);
-    clusters.firstTexel.push_back(uint32_t(clusters.memberTexels.size()));
-  };
-  for (const std::vector<uint32_t>& members : fronts) emit(members, false);
-  for (const std::vector<uint32_t>& members : backs) emit(members, true);
+    clusters.back[c] = back ? 1 : 0;
+  }, 64);
   return clusters;
 }
 

@@ -541,38 +541,68 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   // A back cluster: rays of its own from behind its texels, as many as they would cast from the
   // front (up to clusterRays), round robin, each texel stratifying its share.
   const uint32_t clusterRays = uint32_t(options.clusterRays);
-  const TexelLookup lookup(texels);
-  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0);
-  // `batch` is the thread's own for this bake (its buffers reused from row to row, its
-  // per-geometry cache valid for this bake's tracer only).
-  auto backRow = [&](uint32_t c, RowBuilder& row, GatherBatch& batch) {
-    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
-    const uint32_t m = last - first;
-    const uint32_t count = uint32_t(std::min<uint64_t>(clusterRays, uint64_t(rays) * m));
-    batch.clear();
+  auto backRayCount = [&](uint32_t c) {
+    const uint64_t m = clusters.firstTexel[c + 1] - clusters.firstTexel[c];
+    return uint32_t(std::min<uint64_t>(clusterRays, uint64_t(rays) * m));
+  };
+  auto queueBackRays = [&](uint32_t c, GatherBatch& batch) {
+    const uint32_t first = clusters.firstTexel[c], m = clusters.firstTexel[c + 1] - first;
+    const uint32_t count = backRayCount(c);
     const sampling::Rng::ItemSeed seed{sampling::Rng::itemSeed(sampling::Stream::ClusterLinks, c)};
-    for (uint32_t s = 0; s < count; ++s) {
-      const uint32_t t = clusters.memberTexels[first + s % m];
-      const uint32_t local = s / m;
-      const uint32_t localCount = (count - s % m + m - 1) / m;
-      sampling::Rng rng(seed, s);
+    // Ray s belongs to member s % m as its (s / m)-th: queued member by member (one frame and
+    // one stratification each; the members' shares differ by one at most).
+    const uint32_t share = count / m, extra = count % m;
+    const sampling::Stratified more(share + 1), fewer(std::max(share, 1u));
+    for (uint32_t i = 0; i < std::min(m, count); ++i) {
+      const uint32_t t = clusters.memberTexels[first + i];
+      const uint32_t localCount = share + (i < extra ? 1 : 0);
+      const sampling::Stratified& strata = i < extra ? more : fewer;
       const sampling::Frame frame(-texels.normal[t]);
-      batch.add(texels.backPosition(t), frame, -texels.geometricNormal[t],
-                sampling::stratified2(rng, local, localCount));
+      const glm::vec3 origin = texels.backPosition(t), geometricNormal = -texels.geometricNormal[t];
+      for (uint32_t local = 0; local < localCount; ++local) {
+        sampling::Rng rng(seed, local * m + i);
+        batch.add(origin, frame, geometricNormal, strata.point(rng, local));
+      }
     }
-    batch.trace(tracer, texels, &lookup);
-    const double weight = 1.0 / double(count);
-    for (uint32_t code : batch.codes()) {
-      const uint32_t target = clusterOf(code);
+  };
+  // The back clusters' rays are traced first, several clusters to a batch (a cluster casts a
+  // few hundred rays; Embree's coherent streams and the hit lookup's prefetching do better on
+  // a thousand or more), their hit codes kept for the rows and their sky transfer stored.
+  std::vector<uint32_t> backStart(backClusters.size() + 1, 0);
+  for (size_t i = 0; i < backClusters.size(); ++i)
+    backStart[i + 1] = backStart[i] + backRayCount(backClusters[i]);
+  std::vector<uint32_t> backCodes(backStart.back());
+  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0);
+  const TexelLookup lookup(texels);
+  const size_t rowCount = size_t(points) + backClusters.size();
+  progress.begin("form factors", backClusters.size() + groups.size() + rowCount);
+  parallelForBlocks(backClusters.size(), [&](size_t begin, size_t end, int) {
+    constexpr size_t kRaysPerBatch = 1024;
+    GatherBatch batch;  // its per-geometry cache is valid for this bake's tracer only
+    for (size_t i = begin; i < end && !progress.cancelled();) {
+      batch.clear();
+      const size_t firstCluster = i;
+      for (; i < end && batch.size() < kRaysPerBatch; ++i) queueBackRays(backClusters[i], batch);
+      batch.trace(tracer, texels, &lookup);
+      std::copy(batch.codes().begin(), batch.codes().end(), backCodes.begin() + backStart[firstCluster]);
+      for (size_t j = firstCluster; j < i; ++j) {
+        const uint32_t from = backStart[j] - backStart[firstCluster];
+        const uint32_t count = backStart[j + 1] - backStart[j];
+        const GatherBatch::Summary seen = batch.summarize(tracer, from, from + count);
+        for (int k = 0; k < kShCount; ++k)
+          transport.clusterSky[size_t(backClusters[j]) * kShCount + size_t(k)] =
+              runtime::floatToHalf(float(seen.sky[k] * (1.0 / double(count))));
+      }
+    }
+    progress.advance(end - begin);
+  }, 16);
+  auto backRow = [&](size_t i, RowBuilder& row) {
+    const double weight = 1.0 / double(backStart[i + 1] - backStart[i]);
+    for (uint32_t k = backStart[i]; k < backStart[i + 1]; ++k) {
+      const uint32_t target = clusterOf(backCodes[k]);
       if (target != kNoTexel) row.add(target, weight);
     }
-    const GatherBatch::Summary seen = batch.summarize(tracer, 0, count);
-    for (int i = 0; i < kShCount; ++i)
-      transport.clusterSky[size_t(c) * kShCount + size_t(i)] =
-          runtime::floatToHalf(float(seen.sky[i] * weight));
   };
-  const size_t rowCount = size_t(points) + backClusters.size();
-  progress.begin("form factors", groups.size() + rowCount);
   buildRows(
       groups.size(), sharedBase, progress, [&] { return RowBuilder(sharedBase); },
       [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
@@ -583,20 +613,14 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
         for (Link& l : links) l.weight = float(double(l.weight) / sum);
       },
       transport.sharedFar, 64);
-  struct RowState {
-    RowBuilder row;
-    GatherBatch batch;
-  };
   buildRows(
-      rowCount, uint32_t(targetCount), progress,
-      [&] { return RowState{RowBuilder(uint32_t(targetCount)), GatherBatch()}; },
-      [&](size_t r, RowState& state, std::vector<Link>& links) {
-        if (r < points) pointRow(uint32_t(r), state.row);
-        else backRow(backClusters[r - points], state.row, state.batch);
-        state.row.finish(options.minWeight, links);
+      rowCount, uint32_t(targetCount), progress, [&] { return RowBuilder(uint32_t(targetCount)); },
+      [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
+        if (r < points) pointRow(uint32_t(r), row);
+        else backRow(r - points, row);
+        row.finish(options.minWeight, links);
       },
-      // Small blocks: the back-side clusters at the end trace rays, the others don't.
-      transport.links, 64);
+      transport.links, 256);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
 

@@ -46,6 +46,7 @@ BakeOptions bakePreset(Quality quality);
 struct StageTime {
   std::string name;
   double seconds = 0.0;
+  uint64_t rays = 0;  // traced in the stage, closest-hit and occlusion rays together
 };
 
 struct BakeResult {
