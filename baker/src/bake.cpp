@@ -106,9 +106,7 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   progress.begin("solve", 1);
   {
     runtime::Solver solver(tr);
-    solver.setParallelFor([](size_t count, const std::function<void(size_t, size_t)>& body) {
-      parallelForBlocks(count, [&](size_t begin, size_t end, int) { body(begin, end); }, 1);
-    });
+    solver.setParallelFor(blockRanges());
     solver.solve(options.solve);
     solver.gatherTexels(result.texelDirect, result.texelIndirect);
   }

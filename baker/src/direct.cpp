@@ -161,17 +161,17 @@ Shadowed closedFormEmissivePass(const RayTracer& tracer, const Emitter& e, const
   for (int s = 0; s < samples; ++s) {
     sampling::Rng rng(seed, seedBase | (first + uint32_t(s)));
     const EmitterSample q = sampleEmitter(e, strata.point(rng, uint32_t(s)));
+    // The ray runs along w itself (Embree needs no unit direction), and the cosines are
+    // scaled by |w|: no square root or division per ray, only one for the weight.
     const glm::vec3 w = q.point - r.position;
     const float dist2 = glm::dot(w, w);
     if (!(dist2 > 0.0f)) continue;
-    const float dist = std::sqrt(dist2);
-    const glm::vec3 dir = w / dist;
-    const float cosTheta = glm::dot(r.normal, dir);
-    float cosEmit = -glm::dot(q.normal, dir);
+    const float cosTheta = glm::dot(r.normal, w);  // × |w|
+    float cosEmit = -glm::dot(q.normal, w);        // × |w|
     if (e.doubleSided) cosEmit = std::abs(cosEmit);
     if (cosTheta <= 0.0f || cosEmit <= 0.0f) continue;
-    batch.add(dir, dist * (1.0f - kShadowShorten),
-              double(cosTheta) * double(cosEmit) / double(dist2));
+    batch.add(w, 1.0f - kShadowShorten,
+              double(cosTheta) * double(cosEmit) / (double(dist2) * double(dist2)));
     if (batch.full()) batch.flush(tracer, count);
   }
   batch.flush(tracer, count);

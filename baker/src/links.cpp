@@ -634,39 +634,36 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
             runtime::floatToHalf(gather.sky[t * kShCount + size_t(i)]);
   }, 4096);
   // What each cluster gathers: its texels' gather points, area-weighted (a back cluster: its
-  // own row).
-  transport.clusterGather = runtime::SparseMatrix();
-  std::vector<std::pair<uint32_t, float>> entries;
-  uint32_t nextBack = 0;
-  for (uint32_t c = 0; c < clusterCount; ++c) {
-    entries.clear();
+  // own row), with the front clusters' sky transfer alike.
+  std::vector<uint32_t> backRowOf(clusterCount, kNoTexel);
+  for (size_t i = 0; i < backClusters.size(); ++i) backRowOf[backClusters[i]] = points + uint32_t(i);
+  transport.clusterGather = runtime::normalisedRows(clusterCount, [&](size_t c, auto& entries) {
     const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
     if (clusters.back[c]) {
-      if (first < last) entries.emplace_back(points + nextBack++, 1.0f);
-    } else {
-      double area = 0.0;
-      for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
-      double sky[kShCount] = {};
-      for (uint32_t k = first; k < last; ++k) {
-        const uint32_t t = clusters.memberTexels[k];
-        if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
-        const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
-        entries.emplace_back(gather.pointOfTexel[t], float(share));
-        for (int i = 0; i < kShCount; ++i)
-          sky[i] += share * double(gather.sky[size_t(t) * kShCount + size_t(i)]);
-      }
-      for (int i = 0; i < kShCount; ++i)
-        transport.clusterSky[size_t(c) * kShCount + size_t(i)] = runtime::floatToHalf(float(sky[i]));
+      if (backRowOf[c] != kNoTexel) entries.emplace_back(backRowOf[c], 1.0f);
+      return;
     }
-    transport.clusterGather.appendNormalisedRow(entries);
-  }
+    double area = 0.0;
+    for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
+    double sky[kShCount] = {};
+    for (uint32_t k = first; k < last; ++k) {
+      const uint32_t t = clusters.memberTexels[k];
+      if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
+      const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
+      entries.emplace_back(gather.pointOfTexel[t], float(share));
+      for (int i = 0; i < kShCount; ++i)
+        sky[i] += share * double(gather.sky[size_t(t) * kShCount + size_t(i)]);
+    }
+    for (int i = 0; i < kShCount; ++i)
+      transport.clusterSky[c * kShCount + size_t(i)] = runtime::floatToHalf(float(sky[i]));
+  }, blockRanges());
   // How texels read the gather points and how the points smooth each other, built by the
   // runtime from what the transport file stores (so a loaded file has the very same maps).
   transport.filterPasses = std::max(0, options.filterPasses);
   static_assert(TexelGather::kNoHit == kNoTexel, "invalid texels read no gather point");
   transport.texelPoint = gather.pointOfTexel;
   transport.texelNeighbours = markFilterNeighbours(tracer, texels, gather, options);
-  runtime::buildGatherMaps(transport);
+  runtime::buildGatherMaps(transport, blockRanges());
   return Status::ok();
 }
 

@@ -18,6 +18,7 @@ float tentWeight(int k) {
   return (kNeighbourOffsets[k][0] == 0 || kNeighbourOffsets[k][1] == 0) ? 2.0f : 1.0f;
 }
 
+
 }  // namespace
 
 std::string checkGatherSource(const TransportData& d) {
@@ -33,7 +34,7 @@ std::string checkGatherSource(const TransportData& d) {
   return {};
 }
 
-void buildGatherMaps(TransportData& d) {
+void buildGatherMaps(TransportData& d, const ParallelFor& parallelFor) {
   const uint32_t count = d.texelCount, points = d.gatherPointCount;
   // Where each texel sits: its atlas and pixel (texels are numbered in atlas scan order, one
   // pixel each; a texel no pixel names has no neighbours, and neither have the texels of an
@@ -69,14 +70,10 @@ void buildGatherMaps(TransportData& d) {
       out.emplace_back(d.texelPoint[n], tentWeight(k));
     }
   };
-  std::vector<std::pair<uint32_t, float>> entries;
-  d.texelGather = SparseMatrix();
-  d.texelGather.rowStart.reserve(size_t(count) + 1);
-  for (uint32_t t = 0; t < count; ++t) {
-    entries.clear();
-    if (d.texelPoint[t] != kNoTexel) mixOf(t, entries);
-    d.texelGather.appendNormalisedRow(entries);
-  }
+  using Entries = std::vector<std::pair<uint32_t, float>>;
+  d.texelGather = normalisedRows(count, [&](size_t t, Entries& entries) {
+    if (d.texelPoint[t] != kNoTexel) mixOf(uint32_t(t), entries);
+  }, parallelFor);
   // A point takes the mean over its texels of that same mix (the tent applied to the points'
   // values as the texels see them, averaged back over the point).
   d.pointFilter = SparseMatrix();
@@ -89,9 +86,7 @@ void buildGatherMaps(TransportData& d) {
   std::vector<uint32_t> next(start.begin(), start.end() - 1);
   for (uint32_t t = 0; t < count; ++t)
     if (d.texelPoint[t] != kNoTexel) members[next[d.texelPoint[t]]++] = t;
-  d.pointFilter.rowStart.reserve(size_t(points) + 1);
-  for (uint32_t p = 0; p < points; ++p) {
-    entries.clear();
+  d.pointFilter = normalisedRows(points, [&](size_t p, Entries& entries) {
     for (uint32_t k = start[p]; k < start[p + 1]; ++k) {
       const size_t before = entries.size();
       mixOf(members[k], entries);
@@ -100,8 +95,7 @@ void buildGatherMaps(TransportData& d) {
       for (size_t i = before + 1; i < entries.size(); ++i)
         if (entries[i].first == p) entries[i].second = 0.0f;
     }
-    d.pointFilter.appendNormalisedRow(entries);
-  }
+  }, parallelFor);
 }
 
 }  // namespace afterglow::runtime

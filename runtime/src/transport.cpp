@@ -43,6 +43,35 @@ void SparseMatrix::appendNormalisedRow(std::vector<std::pair<uint32_t, float>>& 
   rowStart.push_back(uint32_t(column.size()));
 }
 
+SparseMatrix normalisedRows(size_t count, const NormalisedRowFill& fill, const ParallelFor& parallelFor) {
+  constexpr size_t kRowsPerBlock = 4096;
+  std::vector<SparseMatrix> blocks((count + kRowsPerBlock - 1) / kRowsPerBlock);
+  auto build = [&](size_t begin, size_t end) {
+    std::vector<std::pair<uint32_t, float>> entries;
+    for (size_t b = begin; b < end; ++b)
+      for (size_t r = b * kRowsPerBlock; r < std::min(count, (b + 1) * kRowsPerBlock); ++r) {
+        entries.clear();
+        fill(r, entries);
+        blocks[b].appendNormalisedRow(entries);
+      }
+  };
+  if (parallelFor) parallelFor(blocks.size(), build);
+  else build(0, blocks.size());
+  SparseMatrix out;
+  size_t total = 0;
+  for (const SparseMatrix& b : blocks) total += b.size();
+  out.rowStart.reserve(count + 1);
+  out.column.reserve(total);
+  out.weight.reserve(total);
+  for (const SparseMatrix& b : blocks) {
+    const uint32_t base = uint32_t(out.column.size());
+    for (size_t r = 1; r < b.rowStart.size(); ++r) out.rowStart.push_back(base + b.rowStart[r]);
+    out.column.insert(out.column.end(), b.column.begin(), b.column.end());
+    out.weight.insert(out.weight.end(), b.weight.begin(), b.weight.end());
+  }
+  return out;
+}
+
 uint32_t SparseLinks::bitsFor(uint32_t targets) {
   uint32_t bits = 1;
   while (bits < 32 && (uint64_t(1) << bits) < uint64_t(targets)) ++bits;

@@ -29,4 +29,12 @@ void parallelFor(size_t count, F&& body, size_t grain = 0) {
       grain);
 }
 
+// parallelForBlocks as the runtime takes it (runtime::ParallelFor: body(begin, end) over
+// [0, count), one item a block), for the solver and the gather maps.
+inline std::function<void(size_t, const std::function<void(size_t, size_t)>&)> blockRanges() {
+  return [](size_t count, const std::function<void(size_t, size_t)>& body) {
+    parallelForBlocks(count, [&](size_t begin, size_t end, int) { body(begin, end); }, 1);
+  };
+}
+
 }  // namespace afterglow

@@ -37,12 +37,6 @@ struct SolveOptions {
   float tolerance = 1e-3f;        // stop when the largest relative change of R is below this
 };
 
-// Runs body(begin, end) over consecutive ranges covering [0, count), on as many threads as it
-// likes, and returns when every range is done. The solver splits its work into fixed blocks and
-// hands their indices to this, so results never depend on how the ranges are spread.
-using ParallelFor =
-    std::function<void(size_t count, const std::function<void(size_t begin, size_t end)>& body)>;
-
 class Solver {
  public:
   // Keeps a reference to `data`: it must outlive the solver, and prepare() must follow any

@@ -9,7 +9,9 @@
 // This header depends on GLM and the standard library only, so engines can link it alone.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -98,6 +100,19 @@ struct SparseMatrix {
   // sorted), sums a column's weights (in double) and scales the row to sum to one.
   void appendNormalisedRow(std::vector<std::pair<uint32_t, float>>& entries);
 };
+
+// Runs body(begin, end) over consecutive ranges covering [0, count), on as many threads as it
+// likes, and returns when every range is done. The runtime splits its work into fixed blocks and
+// hands their indices to this, so results never depend on how the ranges are spread.
+using ParallelFor =
+    std::function<void(size_t count, const std::function<void(size_t begin, size_t end)>& body)>;
+
+// A matrix of `count` rows, row r appendNormalisedRow of the entries fill(r, entries) adds
+// (entries arrive empty), built in fixed blocks, on parallelFor's threads when there is one, and
+// joined in order: the same matrix either way. fill must be safe to call concurrently.
+using NormalisedRowFill = std::function<void(size_t row, std::vector<std::pair<uint32_t, float>>& entries)>;
+SparseMatrix normalisedRows(size_t count, const NormalisedRowFill& fill,
+                            const ParallelFor& parallelFor = {});
 
 // A source of direct light whose unit transfer was precomputed: a punctual light, or all the
 // emissive surfaces of one material (area light, sampled explicitly by the baker).
@@ -243,7 +258,8 @@ struct TransportData {
 // its marked neighbours (2 along the axes, 1 on the diagonals), normalised; a gather point's
 // smoothing row is the mean of its texels' mixes, its own weight counted once per texel.
 // Requires checkGatherSource() to be empty.
-void buildGatherMaps(TransportData& data);
+// With `parallelFor`, the rows are built in fixed blocks on its threads (the same maps).
+void buildGatherMaps(TransportData& data, const ParallelFor& parallelFor = {});
 // Empty when texelPoint and texelNeighbours have an entry per texel and every gather point
 // exists, else what is wrong.
 std::string checkGatherSource(const TransportData& data);
