@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -228,6 +229,39 @@ TEST(RuntimeSolver, QuantisedRowsKeepTheirSums) {
     double kept = 0.0;
     for (size_t k = 0; k < m.size(); ++k) kept += double(m.weightAt(0, k));
     EXPECT_NEAR(kept, sum, 1e-6 * sum) << targets << " targets";
+  }
+}
+
+// normalisedRows builds its blocks on whatever threads run them: run backwards one block at a
+// time, it must give the matrix that appending the rows in order gives, each row summing to 1.
+TEST(RuntimeSolver, NormalisedRowsDoNotDependOnHowTheBlocksRun) {
+  const size_t rows = 10000;  // a few blocks
+  auto fill = [](size_t r, std::vector<std::pair<uint32_t, float>>& entries) {
+    test::Rng rng{r + 1};
+    const uint32_t n = rng.below(12);  // some rows empty, some with repeated columns
+    for (uint32_t k = 0; k < n; ++k) entries.emplace_back(rng.below(50), 0.1f + rng.unit());
+  };
+  SparseMatrix serial;
+  std::vector<std::pair<uint32_t, float>> entries;
+  for (size_t r = 0; r < rows; ++r) {
+    entries.clear();
+    fill(r, entries);
+    serial.appendNormalisedRow(entries);
+  }
+  size_t blocksRun = 0;
+  const ParallelFor backwards = [&](size_t count, const std::function<void(size_t, size_t)>& body) {
+    for (size_t b = count; b-- > 0;) body(b, b + 1), ++blocksRun;
+  };
+  const SparseMatrix blocked = normalisedRows(rows, fill, backwards);
+  EXPECT_GT(blocksRun, 1u);
+  EXPECT_EQ(blocked.rowStart, serial.rowStart);
+  EXPECT_EQ(blocked.column, serial.column);
+  EXPECT_EQ(blocked.weight, serial.weight);
+  for (size_t r = 0; r < blocked.rows(); ++r) {
+    if (blocked.rowStart[r] == blocked.rowStart[r + 1]) continue;
+    double sum = 0.0;
+    for (uint32_t k = blocked.rowStart[r]; k < blocked.rowStart[r + 1]; ++k) sum += blocked.weight[k];
+    EXPECT_NEAR(sum, 1.0, 1e-6) << "row " << r;
   }
 }
 
