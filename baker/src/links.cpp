@@ -54,19 +54,23 @@ void dropWeakLinks(float minWeight, std::vector<Link>& row) {
 class RowBuilder {
  public:
   explicit RowBuilder(uint32_t clusters)
-      : sum_(clusters, 0.0), touched_((size_t(clusters) + 63) / 64, 0) {}
+      : sum_(clusters, 0.0), touched_((size_t(clusters) + 63) / 64, 0), words_(touched_.size()) {}
 
   void add(uint32_t cluster, double weight) {
+    // The word's index is always written and only counted when the word was empty: no branch
+    // (whether a hit is a row's first on its word is a coin toss).
     uint64_t& word = touched_[cluster >> 6];
-    if (word == 0) words_.push_back(cluster >> 6);
+    words_[wordCount_] = cluster >> 6;
+    wordCount_ += word == 0 ? 1 : 0;
     word |= uint64_t(1) << (cluster & 63);
     sum_[cluster] += weight;
   }
 
   void finish(float minWeight, std::vector<Link>& row) {
     row.clear();
-    std::sort(words_.begin(), words_.end());
-    for (uint32_t w : words_) {
+    std::sort(words_.begin(), words_.begin() + wordCount_);
+    for (size_t i = 0; i < wordCount_; ++i) {
+      const uint32_t w = words_[i];
       for (uint64_t bits = touched_[w]; bits != 0; bits &= bits - 1) {
         const uint32_t c = w * 64 + uint32_t(__builtin_ctzll(bits));
         row.push_back({c, float(sum_[c])});
@@ -74,14 +78,15 @@ class RowBuilder {
       }
       touched_[w] = 0;
     }
-    words_.clear();
+    wordCount_ = 0;
     dropWeakLinks(minWeight, row);
   }
 
  private:
   std::vector<double> sum_;
   std::vector<uint64_t> touched_;  // bit c of word c / 64: cluster c was added to
-  std::vector<uint32_t> words_;    // the words of touched_ that are not zero
+  std::vector<uint32_t> words_;    // the first wordCount_: the words of touched_ not zero
+  size_t wordCount_ = 0;
 };
 
 // Builds a sparse matrix row by row in parallel: fill(row, state, links) writes a row's links
