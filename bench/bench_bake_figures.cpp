@@ -127,14 +127,16 @@ class Throughput {
   void print(const baker::BakeResult& r) const {
     const double intersect = double(r.raysIntersected), occluded = double(r.raysOccluded);
     const double bake = (intersect + occluded) / bestPrecompute_;
-    const double raw = (intersect + occluded) / (intersect / rawIntersect_ + occluded / rawOccluded_);
+    const double raw =
+        (intersect + occluded) / (intersect / rawIntersect_ + occluded / rawOccluded_);
     std::printf("  raw Embree   %.1f M intersect/s, %.1f M occluded/s (%d threads, best of %d "
                 "passes between the bakes)\n",
                 rawIntersect_ / 1e6, rawOccluded_ / 1e6, threadCount(), runs_);
     std::printf("  precompute   %.1f M rays in %.2f s (%.0f%% occluded, best of %d): %.1f M rays/s "
                 "= %.0f%% of raw Embree on the same mix   target >= 70%%: %s\n",
-                (intersect + occluded) / 1e6, bestPrecompute_, 100.0 * occluded / (intersect + occluded),
-                runs_, bake / 1e6, 100.0 * bake / raw, mark(bake >= 0.7 * raw));
+                (intersect + occluded) / 1e6, bestPrecompute_,
+                100.0 * occluded / (intersect + occluded), runs_, bake / 1e6, 100.0 * bake / raw,
+                mark(bake >= 0.7 * raw));
   }
 
  private:
@@ -183,7 +185,8 @@ int cornell(int threads, bool quick) {
   Throughput throughput(scene);
   Result<baker::BakeResult> baked = Status::error("not run");
   for (int run = 0; run < kRuns; ++run)
-    if (!throughput.bake(options, baked)) return fail(baked ? "raw Embree setup failed" : baked.message());
+    if (!throughput.bake(options, baked))
+      return fail(baked ? "raw Embree setup failed" : baked.message());
   const double best = throughput.bestBakeSeconds();
   const baker::BakeResult& b = baked.value();
   size_t valid = 0;

@@ -130,7 +130,8 @@ TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
     EXPECT_TRUE(report.at("stages").contains(stage)) << stage;
   // Every ray traced belongs to one stage.
   uint64_t stageRays = 0;
-  for (const auto& [stage, rays] : report.at("stageRays").items()) stageRays += rays.get<uint64_t>();
+  for (const auto& [stage, rays] : report.at("stageRays").items())
+    stageRays += rays.get<uint64_t>();
   EXPECT_EQ(stageRays, report.at("raysTraced").get<uint64_t>());
   EXPECT_GT(report.at("stageRays").at("gather").get<uint64_t>(), points * 64);
   EXPECT_GT(report.at("peakMemoryBytes").get<size_t>(), 1000000u);

@@ -77,7 +77,8 @@ class GroupClusterer {
     while (!stack.empty()) {
       const Range node = stack.back();
       stack.pop_back();
-      const uint32_t mid = node.begin + split(group.data() + node.begin, node.end - node.begin, scratch);
+      const uint32_t mid =
+          node.begin + split(group.data() + node.begin, node.end - node.begin, scratch);
       if (mid > node.begin) {
         // Second half first on the stack so the first half is finished first: the order of
         // the clusters follows the subdivision, whatever the thread count.
@@ -210,7 +211,8 @@ class GroupClusterer {
         return partition(node, n, scratch, [&](uint32_t t) { return distanceOf(t) < cut; });
     }
     float limit = options_.clusterSize > 0.0f ? options_.clusterSize : std::numeric_limits<float>::infinity();
-    if (options_.clusterTexels > 0.0f) limit = std::min(limit, options_.clusterTexels * edge / float(n));
+    if (options_.clusterTexels > 0.0f)
+      limit = std::min(limit, options_.clusterTexels * edge / float(n));
     // The median only matters when the node is within the other limits (most nodes are not:
     // the subdivision starts from whole instances).
     if (extent[axis] <= limit && options_.adaptiveScale > 0.0f && !distance_.empty()) {
@@ -382,7 +384,8 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
     const auto [begin, end] = groups[task % groups.size()];
     return end - begin;
   };
-  std::stable_sort(tasks.begin(), tasks.end(), [&](size_t a, size_t b) { return texelsOf(a) > texelsOf(b); });
+  std::stable_sort(tasks.begin(), tasks.end(),
+                   [&](size_t a, size_t b) { return texelsOf(a) > texelsOf(b); });
   parallelFor(tasks.size(), [&](size_t i) {
     const size_t task = tasks[i], g = task % groups.size();
     const bool back = task >= groups.size();
@@ -393,7 +396,8 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
       members.erase(std::remove_if(members.begin(), members.end(),
                                    [&](uint32_t t) { return !gather->backSeen[t]; }),
                     members.end());
-    if (!members.empty()) (back ? backClusterer : frontClusterer).run(std::move(members), perTask[task]);
+    if (members.empty()) return;
+    (back ? backClusterer : frontClusterer).run(std::move(members), perTask[task]);
   }, 1);
   // Concatenated in group order, so the result does not depend on the thread count.
   std::vector<std::vector<uint32_t>> fronts, backs;
@@ -446,7 +450,8 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
     clusters.position[c] = glm::vec3(weighted ? position / area : plainPosition / n);
     if (!(glm::length(normal) > 0.0)) normal = plainNormal;
     const double length = glm::length(normal);
-    const glm::vec3 unit = length > 0.0 ? glm::vec3(normal / length) : texels.normal[members.front()];
+    const glm::vec3 unit =
+        length > 0.0 ? glm::vec3(normal / length) : texels.normal[members.front()];
     clusters.normal[c] = back ? -unit : unit;
     clusters.area[c] = float(area);
     clusters.material[c] = material[members.front()];

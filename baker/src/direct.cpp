@@ -52,6 +52,7 @@ class ShadowRays {
   // Starts the rays of a receiver (the previous one's must have been flushed).
   void begin(const Receiver& r) { receiver_ = &r; }
 
+  // A ray along dir (not necessarily of unit length) to tfar, in units of dir.
   void add(glm::vec3 dir, float tfar, double weight = 1.0) {
     weight_[size_] = weight;
     below_[size_] = glm::dot(dir, receiver_->geometricNormal) <= 0.0f;

@@ -589,7 +589,8 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
       const size_t firstCluster = i;
       for (; i < end && batch.size() < kRaysPerBatch; ++i) queueBackRays(backClusters[i], batch);
       batch.trace(tracer, texels, &lookup);
-      std::copy(batch.codes().begin(), batch.codes().end(), backCodes.begin() + backStart[firstCluster]);
+      std::copy(batch.codes().begin(), batch.codes().end(),
+                backCodes.begin() + backStart[firstCluster]);
       for (size_t j = firstCluster; j < i; ++j) {
         const uint32_t from = backStart[j] - backStart[firstCluster];
         const uint32_t count = backStart[j + 1] - backStart[j];
@@ -641,7 +642,8 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   // What each cluster gathers: its texels' gather points, area-weighted (a back cluster: its
   // own row), with the front clusters' sky transfer alike.
   std::vector<uint32_t> backRowOf(clusterCount, kNoTexel);
-  for (size_t i = 0; i < backClusters.size(); ++i) backRowOf[backClusters[i]] = points + uint32_t(i);
+  for (size_t i = 0; i < backClusters.size(); ++i)
+    backRowOf[backClusters[i]] = points + uint32_t(i);
   transport.clusterGather = runtime::normalisedRows(clusterCount, [&](size_t c, auto& entries) {
     const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
     if (clusters.back[c]) {

@@ -18,7 +18,6 @@ float tentWeight(int k) {
   return (kNeighbourOffsets[k][0] == 0 || kNeighbourOffsets[k][1] == 0) ? 2.0f : 1.0f;
 }
 
-
 }  // namespace
 
 std::string checkGatherSource(const TransportData& d) {

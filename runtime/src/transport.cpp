@@ -43,7 +43,8 @@ void SparseMatrix::appendNormalisedRow(std::vector<std::pair<uint32_t, float>>& 
   rowStart.push_back(uint32_t(column.size()));
 }
 
-SparseMatrix normalisedRows(size_t count, const NormalisedRowFill& fill, const ParallelFor& parallelFor) {
+SparseMatrix normalisedRows(size_t count, const NormalisedRowFill& fill,
+                            const ParallelFor& parallelFor) {
   constexpr size_t kRowsPerBlock = 4096;
   std::vector<SparseMatrix> blocks((count + kRowsPerBlock - 1) / kRowsPerBlock);
   auto build = [&](size_t begin, size_t end) {

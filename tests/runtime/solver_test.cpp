@@ -260,7 +260,8 @@ TEST(RuntimeSolver, NormalisedRowsDoNotDependOnHowTheBlocksRun) {
   for (size_t r = 0; r < blocked.rows(); ++r) {
     if (blocked.rowStart[r] == blocked.rowStart[r + 1]) continue;
     double sum = 0.0;
-    for (uint32_t k = blocked.rowStart[r]; k < blocked.rowStart[r + 1]; ++k) sum += blocked.weight[k];
+    for (uint32_t k = blocked.rowStart[r]; k < blocked.rowStart[r + 1]; ++k)
+      sum += blocked.weight[k];
     EXPECT_NEAR(sum, 1.0, 1e-6) << "row " << r;
   }
 }

@@ -110,7 +110,8 @@ using ParallelFor =
 // A matrix of `count` rows, row r appendNormalisedRow of the entries fill(r, entries) adds
 // (entries arrive empty), built in fixed blocks, on parallelFor's threads when there is one, and
 // joined in order: the same matrix either way. fill must be safe to call concurrently.
-using NormalisedRowFill = std::function<void(size_t row, std::vector<std::pair<uint32_t, float>>& entries)>;
+using NormalisedRowFill =
+    std::function<void(size_t row, std::vector<std::pair<uint32_t, float>>& entries)>;
 SparseMatrix normalisedRows(size_t count, const NormalisedRowFill& fill,
                             const ParallelFor& parallelFor = {});
 
