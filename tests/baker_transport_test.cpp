@@ -375,6 +375,55 @@ TEST(BakerTransport, BackFacesOfSingleSidedGeometryInvalidateTexels) {
   EXPECT_EQ(invalid, 8);
 }
 
+// A slab cuts through a wall, as Sponza's roof cuts through its cornices: the wall's texel row
+// across the slab is buried, and the rays from a closed room under the slab that land on that
+// row's lower part must take the light of a wall texel under the slab, never of the one above
+// it (in the sun). The wall's rows run downwards, so the nearest texel in scan order is the one
+// above.
+TEST(BakerTransport, HitsOnABuriedTexelTakeANeighbourTheHitSees) {
+  Builder b;
+  b.scene.materials.push_back(material("grey", glm::vec3(0.5f)));
+  const float slab = 1.125f;  // the wall's row 3 has its samples in the slab
+  b.addQuad({0, 0, 0}, {0, 0, 1}, {1, 0, 0}, 4, 1, 0);    // floor, facing up
+  b.addQuad({0, 2, 0}, {0, 0, 1}, {0, -2, 0}, 8, 1, 0);   // wall at x = 0 facing +X, rows down
+  b.addQuad({0, slab - 0.005f, 0}, {1, 0, 0}, {0, 0, 1}, 4, 1, 0);  // slab underside, facing -Y
+  b.addQuad({0, slab + 0.005f, 0}, {0, 0, 1}, {1, 0, 0}, 4, 1, 0);  // slab top, facing +Y
+  // The room's other walls, up to the slab.
+  b.addQuad({1, 0, 0}, {0, 0, 1}, {0, slab, 0}, 4, 1, 0);  // x = 1, facing -X
+  b.addQuad({0, 0, 0}, {1, 0, 0}, {0, slab, 0}, 4, 1, 0);  // z = 0, facing +Z
+  b.addQuad({0, 0, 1}, {0, slab, 0}, {1, 0, 0}, 4, 1, 0);  // z = 1, facing -Z
+  b.finish();
+  auto tracer = b.tracer();
+  ASSERT_TRUE(tracer);
+  LinkOptions opt;
+  opt.texelRays = 1024;
+  runtime::TransportData data;
+  std::vector<uint32_t> pointOf;
+  ASSERT_TRUE(gatherAndLink(b.scene, *tracer, b.texels, b.clusters, opt, data, &pointOf).isOk());
+  const uint32_t floorTexels = 16, wallTexels = 64;
+  int buried = 0;
+  for (uint32_t t = floorTexels; t < floorTexels + wallTexels; ++t)
+    if (!b.texels.valid[t]) {
+      ++buried;
+      EXPECT_NEAR(b.texels.position[t].y, slab, 0.01f) << "wall texel " << t;
+    }
+  ASSERT_GT(buried, 0) << "the slab buries no wall texel: the test lost its point";
+  for (uint32_t t = 0; t < floorTexels; ++t) {
+    ASSERT_TRUE(b.texels.valid[t]);
+    const uint32_t p = pointOf[t];
+    double below = 0.0;
+    for (uint32_t k = data.links.rowStart[p]; k < data.links.rowStart[p + 1]; ++k) {
+      if (runtime::SparseLinks::isPadding(data.links.link[k], data.links.targetBits)) continue;
+      const uint32_t c = data.links.targetAt(k);
+      EXPECT_LT(b.clusters.position[c].y, slab) << "floor texel " << t << " links cluster " << c
+                                                 << " above the slab";
+      below += data.links.weightAt(p, k);
+    }
+    // A closed room: every ray lands on a texel, and what lands on the buried row is not lost.
+    EXPECT_NEAR(below, 1.0, 0.01) << "floor texel " << t;
+  }
+}
+
 // Solves a furnace's transport to convergence for albedos 0.5 and 0.9 and expects every texel
 // (every valid one, given `valid`) at the analytic E/π = Le / (1 − ρ) within 1%.
 void expectFurnaceRadiance(runtime::TransportData& data, const std::vector<uint8_t>* valid,

@@ -25,28 +25,6 @@ namespace {
 using runtime::kNoTexel;
 using runtime::kShCount;
 
-// A valid texel of the same instance next to t in its atlas (the nearest by pixel distance,
-// first in scan order on ties), or kNoTexel.
-uint32_t validNeighbour(const TexelSet& texels, uint32_t t) {
-  const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
-  const int x = texels.pixel[t].x, y = texels.pixel[t].y;
-  uint32_t best = kNoTexel;
-  int bestDist = std::numeric_limits<int>::max();
-  for (int dy = -2; dy <= 2; ++dy)
-    for (int dx = -2; dx <= 2; ++dx) {
-      const int nx = x + dx, ny = y + dy;
-      if (nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height) continue;
-      const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
-      if (n == kNoTexel || !texels.valid[n] || texels.instance[n] != texels.instance[t]) continue;
-      const int dist = dx * dx + dy * dy;
-      if (dist < bestDist) {
-        bestDist = dist;
-        best = n;
-      }
-    }
-  return best;
-}
-
 // Groups the valid texels into 2×2 atlas blocks on one surface; texels near other geometry
 // (TexelSet::nearGeometry) stay alone. Returns per texel its group, numbered in atlas scan
 // order, and the group sizes.
@@ -145,6 +123,17 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   // texels.valid, so changing it during the pass would race and depend on thread timing.
   std::vector<uint8_t> buried(count, 0);
   const TexelLookup lookup(texels);
+  // Texel t's first-pass samples, sample(s, u) for s = 0 .. firstCount[t]: one sequence per
+  // texel (so a ray can be cast again alike).
+  auto firstSamples = [&](uint32_t t, auto&& sample) {
+    const uint32_t n = firstCount[t];
+    const sampling::InterleavedGrid grid(n);
+    sampling::InterleavedGrid::Walk walk(grid);
+    sampling::Rng rng(sampling::Stream::TexelLinks, t, 0);
+    const bool quarter = quartered(t);
+    for (uint32_t s = 0; s < n; ++s)
+      sample(s, quarter ? walk.next(rng, texels.pixel[t].x, texels.pixel[t].y) : walk.next(rng));
+  };
   auto accumulate = [&](TexelRays& s, const GatherBatch::Summary& sum, uint32_t n) {
     for (int k = 0; k < kShCount; ++k) s.sky[k] += sum.sky[k];
     s.inverseDistance += sum.inverseDistance;
@@ -166,16 +155,10 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         if (!texels.valid[t]) continue;
         batchTexels.push_back(uint32_t(t));
         batchFirst.push_back(uint32_t(batch.size()));
-        const uint32_t n = firstCount[t];
-        const sampling::InterleavedGrid grid(n);
-        sampling::InterleavedGrid::Walk walk(grid);
         const sampling::Frame frame(texels.normal[t]);
-        sampling::Rng rng(sampling::Stream::TexelLinks, t, 0);  // one sequence per texel
-        const bool quarter = quartered(uint32_t(t));
-        for (uint32_t s = 0; s < n; ++s)
-          batch.add(texels.position[t], frame, texels.geometricNormal[t],
-                    quarter ? walk.next(rng, texels.pixel[t].x, texels.pixel[t].y)
-                            : walk.next(rng));
+        firstSamples(uint32_t(t), [&](uint32_t, glm::vec2 u) {
+          batch.add(texels.position[t], frame, texels.geometricNormal[t], u);
+        });
       }
       if (batchTexels.empty()) break;
       batch.trace(tracer, texels, &lookup);
@@ -199,6 +182,15 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   }, kTexelsPerBlock);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
+  // Buried texels leave now, so that the rays below, and the first-pass rays that landed on
+  // one (cast again further down), find the texels that stay: a hit on a buried texel's surface
+  // takes the light of a neighbour the hit point sees (TexelLookup, TexelOfHit), never of one
+  // behind a wall (a roof that cuts through a cornice: the cornice's texel across the roof's
+  // joint is buried, and its neighbour above the roof is in the sun).
+  bool anyBuried = false;
+  for (uint32_t t = 0; t < count; ++t)
+    if (buried[t]) texels.valid[t] = 0, anyBuried = true;
+  const TexelLookup settled(texels);
 
   // Where other geometry is close (harmonic distance under blockDistance texel edges) bounced
   // light changes too fast to share: such a texel leaves its block for a gather point of its
@@ -280,7 +272,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         cast(nearTexel[t] ? more : 0u, 2, nullptr);
       }
       if (batchTexels.empty()) break;
-      batch.trace(tracer, texels, &lookup);
+      batch.trace(tracer, texels, &settled);
       size_t at = 0;
       for (const uint32_t u : batchTexels) {
         const uint32_t n = extraStart[u + 1] - extraStart[u];
@@ -352,6 +344,46 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     }
   }
 
+  // The kept first-pass rays that landed on a buried texel, cast again and resolved against
+  // the texels that stay. (Found through a bitset: every kept hit is looked up, and a byte per
+  // texel would miss the cache for most of them.)
+  std::vector<uint64_t> buriedBits(anyBuried ? (size_t(count) + 63) / 64 : 0, 0);
+  for (uint32_t t = 0; t < count && anyBuried; ++t)
+    if (buried[t]) buriedBits[t >> 6] |= uint64_t(1) << (t & 63);
+  auto onBuried = [&](uint32_t code) {
+    const uint32_t t = code & TexelGather::kTexelMask;
+    return code != TexelGather::kNoHit && (buriedBits[t >> 6] >> (t & 63)) & 1u;
+  };
+  if (anyBuried)
+    parallelForBlocks(count, [&](size_t begin, size_t end, int) {
+      GatherBatch batch;
+      std::vector<uint32_t> at;  // per queued ray, its index into `first`
+      std::vector<uint32_t> redo;
+      for (size_t t = begin; t < end;) {
+        batch.clear();
+        at.clear();
+        for (; t < end && batch.size() < kRaysPerBatch; ++t) {
+          if (!keepFirst[t]) continue;
+          redo.clear();
+          for (uint32_t s = 0; s < firstCount[t]; ++s) {
+            if (onBuried(first[firstStart[t] + s])) redo.push_back(s);
+          }
+          if (redo.empty()) continue;
+          const sampling::Frame frame(texels.normal[t]);
+          size_t next = 0;
+          firstSamples(uint32_t(t), [&](uint32_t s, glm::vec2 u) {
+            if (next == redo.size() || redo[next] != s) return;
+            ++next;
+            batch.add(texels.position[t], frame, texels.geometricNormal[t], u);
+            at.push_back(firstStart[t] + s);
+          });
+        }
+        if (at.empty()) continue;
+        batch.trace(tracer, texels, &settled);
+        for (size_t k = 0; k < at.size(); ++k) first[at[k]] = batch.codes()[k];
+      }
+    }, kTexelsPerBlock);
+
   // Every texel's rays in one list: its first pass (unless it left a full block), then its
   // top-up, adopted and near sets; all but the near set are full sets.
   g.hitStart.assign(size_t(count) + 1, 0);
@@ -377,23 +409,6 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   std::vector<uint32_t>().swap(first);
   std::vector<uint32_t>().swap(second);
 
-  // Invalidate buried texels; rays that landed on one stand on a valid neighbour instead (or
-  // are absorbed when none is near).
-  std::vector<uint32_t> standIn(count, kNoTexel);
-  bool anyBuried = false;
-  for (uint32_t t = 0; t < count; ++t)
-    if (buried[t]) texels.valid[t] = 0, anyBuried = true;
-  if (anyBuried) {
-    for (uint32_t t = 0; t < count; ++t)
-      if (buried[t]) standIn[t] = validNeighbour(texels, t);
-    for (uint32_t& code : g.hits) {
-      if (code == TexelGather::kNoHit) continue;
-      const uint32_t t = code & TexelGather::kTexelMask;
-      if (!buried[t]) continue;
-      const uint32_t s = standIn[t];
-      code = s == kNoTexel ? TexelGather::kNoHit : (s | (code & ~TexelGather::kTexelMask));
-    }
-  }
   // The backs some ray reached, and how far their own rays go (for their clusters).
   g.backSeen.assign(count, 0);
   g.backHarmonicDistance.assign(count, std::numeric_limits<float>::infinity());

@@ -31,9 +31,8 @@ inline bool sameSurface(const TexelSet& texels, uint32_t a, uint32_t b) {
 }
 
 // texelAtUv as one table lookup per hit (the gather's hottest path after Embree): for every
-// atlas pixel, its texel when valid, else the valid texel of the same instance among its 8
-// neighbours nearest to the pixel's centre (texelAtUv measures from the hit point instead).
-// Built from the texels' validity at the time; hits on padding pixels take texelAtUv.
+// atlas pixel, its texel when valid. Built from the texels' validity at the time; hits on other
+// pixels (padding, or a texel that is unused or buried) take texelAtUv.
 class TexelLookup {
  public:
   explicit TexelLookup(const TexelSet& texels) : texels_(texels) {
@@ -42,28 +41,11 @@ class TexelLookup {
       const runtime::AtlasLayout& layout = texels.atlases[a];
       std::vector<uint32_t>& out = resolved_[a];
       out.assign(layout.texelOfPixel.size(), runtime::kNoTexel);
-      for (int y = 0; y < layout.height; ++y)
-        for (int x = 0; x < layout.width; ++x) {
-          const size_t p = size_t(y) * size_t(layout.width) + size_t(x);
-          const uint32_t own = layout.texelOfPixel[p];
-          if (own != runtime::kNoTexel && texels.valid[own]) {
-            out[p] = own | (texels.nearGeometry[own] ? kNear : 0u);
-            continue;
-          }
-          if (own == runtime::kNoTexel) continue;  // padding: the slow path decides
-          float best = std::numeric_limits<float>::infinity();
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-              const int nx = x + dx, ny = y + dy;
-              if (nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height) continue;
-              const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
-              if (n == runtime::kNoTexel || !texels.valid[n] ||
-                  texels.instance[n] != texels.instance[own])
-                continue;
-              const float d = float(dx * dx + dy * dy);
-              if (d < best) best = d, out[p] = n | (texels.nearGeometry[n] ? kNear : 0u);
-            }
-        }
+      for (size_t p = 0; p < out.size(); ++p) {
+        const uint32_t own = layout.texelOfPixel[p];
+        if (own != runtime::kNoTexel && texels.valid[own])
+          out[p] = own | (texels.nearGeometry[own] ? kNear : 0u);
+      }
     }
   }
 
@@ -79,18 +61,46 @@ class TexelLookup {
     return &resolved_[size_t(where.atlas)][size_t(py) * size_t(layout.width) + size_t(px)];
   }
 
-  // The texel, with kNear set when it is near other geometry (TexelSet::nearGeometry), packed
-  // in the same table entry to save a second cache miss per hit. A point inside a chart only
-  // finds that chart's texels (charts sit `padding` texels apart), so no instance check.
+  // The texel, with kNear set when the hit point's sight line to its sample must be checked
+  // (TexelOfHit): for a texel near other geometry (TexelSet::nearGeometry, packed in the same
+  // table entry to save a second cache miss per hit), and always for a stand-in, the valid
+  // neighbour nearest to the hit that texelAtUv finds when the texel under the hit is unused
+  // or buried: its sample may lie past the very wall that buried that texel (a roof cutting
+  // through a cornice). A point inside a chart only finds that chart's texels (charts sit
+  // `padding` texels apart), so no instance check.
   static constexpr uint32_t kNear = 0x80000000u;
   uint32_t resolve(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1,
                    const uint32_t* entry) const {
     if (entry && *entry != runtime::kNoTexel) return *entry;
-    const uint32_t t = texelAtUv(scene, texels_, instance, uv1);
-    return t == runtime::kNoTexel ? t : (t | (texels_.nearGeometry[t] ? kNear : 0u));
+    const uint32_t t =
+        entry ? standIn(scene, instance, uv1, entry) : texelAtUv(scene, texels_, instance, uv1);
+    return t == runtime::kNoTexel ? t : (t | kNear);
   }
 
  private:
+  // texelAtUv over the table (whose entries are the valid texels): the valid texel of the
+  // instance among the 8 around the hit's pixel whose centre is nearest to the hit.
+  uint32_t standIn(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1,
+                   const uint32_t* entry) const {
+    const size_t a = size_t(scene.instances[instance].lightmap.atlas);
+    const runtime::AtlasLayout& layout = texels_.atlases[a];
+    const size_t p = size_t(entry - resolved_[a].data());
+    const int x = int(p % size_t(layout.width)), y = int(p / size_t(layout.width));
+    const glm::vec2 hit = uv1 * glm::vec2(layout.width, layout.height);
+    uint32_t best = runtime::kNoTexel;
+    float bestDist = std::numeric_limits<float>::infinity();
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = x + dx, ny = y + dy;
+        if (nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height) continue;
+        const uint32_t n = resolved_[a][size_t(ny) * size_t(layout.width) + size_t(nx)];
+        if (n == runtime::kNoTexel || texels_.instance[n & ~kNear] != instance) continue;
+        const glm::vec2 d = glm::vec2(float(nx) + 0.5f, float(ny) + 0.5f) - hit;
+        if (glm::dot(d, d) < bestDist) bestDist = glm::dot(d, d), best = n & ~kNear;
+      }
+    return best;
+  }
+
   const TexelSet& texels_;
   std::vector<std::vector<uint32_t>> resolved_;
 };
