@@ -31,8 +31,9 @@ inline bool sameSurface(const TexelSet& texels, uint32_t a, uint32_t b) {
 }
 
 // texelAtUv as one table lookup per hit (the gather's hottest path after Embree): for every
-// atlas pixel, its texel when valid. Built from the texels' validity at the time; hits on other
-// pixels (padding, or a texel that is unused or buried) take texelAtUv.
+// atlas pixel, its texel when valid. Built from the texels' validity at the time; a hit on any
+// other pixel (padding, or a texel that is unused or buried) takes the valid neighbour nearest
+// to it, as texelAtUv does.
 class TexelLookup {
  public:
   explicit TexelLookup(const TexelSet& texels) : texels_(texels) {
@@ -66,8 +67,8 @@ class TexelLookup {
   // table entry to save a second cache miss per hit), and always for a stand-in, the valid
   // neighbour nearest to the hit that texelAtUv finds when the texel under the hit is unused
   // or buried: its sample may lie past the very wall that buried that texel (a roof cutting
-  // through a cornice). A point inside a chart only finds that chart's texels (charts sit
-  // `padding` texels apart), so no instance check.
+  // through a cornice). A texel from the table needs no instance check: a point inside a chart
+  // only finds that chart's texels (charts sit `padding` texels apart).
   static constexpr uint32_t kNear = 0x80000000u;
   uint32_t resolve(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1,
                    const uint32_t* entry) const {
