@@ -4,6 +4,7 @@
 
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/core/parallel.h"
+#include "gather_rays.h"
 
 #include <algorithm>
 #include <cmath>
@@ -127,7 +128,9 @@ class GroupClusterer {
     std::vector<uint32_t> lineOf(leaf.size(), kNoTexel);
     for (size_t i = 0; i < leaf.size(); ++i) {
       Ray line;
-      if (leaf[i] == seed || !sightLine(seed, leaf[i], line)) continue;
+      if (leaf[i] == seed || !liftedSightLine(positionOf(seed), normalOf(seed),
+                                              positionOf(leaf[i]), normalOf(leaf[i]), line))
+        continue;
       lineOf[i] = uint32_t(lines.size());
       lines.push_back(line);
     }
@@ -140,21 +143,6 @@ class GroupClusterer {
     }
     leaf.swap(kept);
     return hidden;
-  }
-
-  // The line from a's sample to b's, both lifted off the surface by a quarter of their
-  // distance; false when they coincide (b is then in sight).
-  bool sightLine(uint32_t a, uint32_t b, Ray& ray) const {
-    const float lift = 0.25f * glm::length(positionOf(b) - positionOf(a));
-    const glm::vec3 from = positionOf(a) + normalOf(a) * lift;
-    const glm::vec3 to = positionOf(b) + normalOf(b) * lift;
-    const glm::vec3 d = to - from;
-    const float length = glm::length(d);
-    if (!(length > 0.0f)) return false;
-    ray.origin = from;
-    ray.direction = d / length;
-    ray.tfar = length;
-    return true;
   }
 
   float distanceOf(uint32_t t) const {

@@ -345,14 +345,9 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   }
 
   // The kept first-pass rays that landed on a buried texel, cast again and resolved against
-  // the texels that stay. (Found through a bitset: every kept hit is looked up, and a byte per
-  // texel would miss the cache for most of them.)
-  std::vector<uint64_t> buriedBits(anyBuried ? (size_t(count) + 63) / 64 : 0, 0);
-  for (uint32_t t = 0; t < count && anyBuried; ++t)
-    if (buried[t]) buriedBits[t >> 6] |= uint64_t(1) << (t & 63);
+  // the texels that stay.
   auto onBuried = [&](uint32_t code) {
-    const uint32_t t = code & TexelGather::kTexelMask;
-    return code != TexelGather::kNoHit && (buriedBits[t >> 6] >> (t & 63)) & 1u;
+    return code != TexelGather::kNoHit && buried[code & TexelGather::kTexelMask];
   };
   if (anyBuried)
     parallelForBlocks(count, [&](size_t begin, size_t end, int) {
@@ -365,9 +360,8 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         for (; t < end && batch.size() < kRaysPerBatch; ++t) {
           if (!keepFirst[t]) continue;
           redo.clear();
-          for (uint32_t s = 0; s < firstCount[t]; ++s) {
+          for (uint32_t s = 0; s < firstCount[t]; ++s)
             if (onBuried(first[firstStart[t] + s])) redo.push_back(s);
-          }
           if (redo.empty()) continue;
           const sampling::Frame frame(texels.normal[t]);
           size_t next = 0;

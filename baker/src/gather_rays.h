@@ -30,10 +30,27 @@ inline bool sameSurface(const TexelSet& texels, uint32_t a, uint32_t b) {
          std::abs(glm::dot(texels.geometricNormal[b], d)) <= 0.2f * distance;
 }
 
+// The sight line from a point on a surface (normal na) to another on the same or a nearby
+// surface (nb), both lifted off their surfaces by a quarter of their distance, so the surface
+// itself does not block it when it curves within a normal cone; false when the two coincide
+// (nothing can stand between them). Clusters test their texels and the filter its neighbours
+// with it.
+inline bool liftedSightLine(glm::vec3 pa, glm::vec3 na, glm::vec3 pb, glm::vec3 nb, Ray& ray) {
+  const float lift = 0.25f * glm::length(pb - pa);
+  const glm::vec3 from = pa + na * lift;
+  const glm::vec3 d = (pb + nb * lift) - from;
+  const float length = glm::length(d);
+  if (!(length > 0.0f)) return false;
+  ray.origin = from;
+  ray.direction = d / length;
+  ray.tfar = length;
+  return true;
+}
+
 // texelAtUv as one table lookup per hit (the gather's hottest path after Embree): for every
 // atlas pixel, its texel when valid. Built from the texels' validity at the time; a hit on any
-// other pixel (padding, or a texel that is unused or buried) takes the valid neighbour nearest
-// to it, as texelAtUv does.
+// other pixel (padding, or a texel that is unused or buried) takes texelAtUv: the valid
+// neighbour nearest to the hit.
 class TexelLookup {
  public:
   explicit TexelLookup(const TexelSet& texels) : texels_(texels) {
@@ -73,35 +90,11 @@ class TexelLookup {
   uint32_t resolve(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1,
                    const uint32_t* entry) const {
     if (entry && *entry != runtime::kNoTexel) return *entry;
-    const uint32_t t =
-        entry ? standIn(scene, instance, uv1, entry) : texelAtUv(scene, texels_, instance, uv1);
+    const uint32_t t = texelAtUv(scene, texels_, instance, uv1);
     return t == runtime::kNoTexel ? t : (t | kNear);
   }
 
  private:
-  // texelAtUv over the table (whose entries are the valid texels): the valid texel of the
-  // instance among the 8 around the hit's pixel whose centre is nearest to the hit.
-  uint32_t standIn(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1,
-                   const uint32_t* entry) const {
-    const size_t a = size_t(scene.instances[instance].lightmap.atlas);
-    const runtime::AtlasLayout& layout = texels_.atlases[a];
-    const size_t p = size_t(entry - resolved_[a].data());
-    const int x = int(p % size_t(layout.width)), y = int(p / size_t(layout.width));
-    const glm::vec2 hit = uv1 * glm::vec2(layout.width, layout.height);
-    uint32_t best = runtime::kNoTexel;
-    float bestDist = std::numeric_limits<float>::infinity();
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int nx = x + dx, ny = y + dy;
-        if (nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height) continue;
-        const uint32_t n = resolved_[a][size_t(ny) * size_t(layout.width) + size_t(nx)];
-        if (n == runtime::kNoTexel || texels_.instance[n & ~kNear] != instance) continue;
-        const glm::vec2 d = glm::vec2(float(nx) + 0.5f, float(ny) + 0.5f) - hit;
-        if (glm::dot(d, d) < bestDist) bestDist = glm::dot(d, d), best = n & ~kNear;
-      }
-    return best;
-  }
-
   const TexelSet& texels_;
   std::vector<std::vector<uint32_t>> resolved_;
 };

@@ -195,20 +195,12 @@ void fillMaterials(const scenes::Scene& scene, const Clusters& clusters,
   }
 }
 
-// The sight line between the samples of texels a and b on one surface, each lifted off it by a
-// quarter of their distance (so the surface itself does not block it), traced from the lower
-// index so that it is symmetric; false when they coincide (nothing can stand between them).
+// The lifted sight line between the samples of texels a and b on one surface, traced from the
+// lower index so that it is symmetric.
 bool sightLine(const TexelSet& texels, uint32_t a, uint32_t b, Ray& sight) {
   const uint32_t from = std::min(a, b), to = std::max(a, b);
-  const float lift = 0.25f * glm::length(texels.position[to] - texels.position[from]);
-  const glm::vec3 p = texels.position[from] + texels.normal[from] * lift;
-  const glm::vec3 q = texels.position[to] + texels.normal[to] * lift;
-  const float length = glm::length(q - p);
-  if (!(length > 0.0f)) return false;
-  sight.origin = p;
-  sight.direction = (q - p) / length;
-  sight.tfar = length;
-  return true;
+  return liftedSightLine(texels.position[from], texels.normal[from], texels.position[to],
+                         texels.normal[to], sight);
 }
 
 // Marks, per texel, the atlas neighbours whose bounced light may smooth its own: valid, same
