@@ -30,6 +30,17 @@ inline bool sameSurface(const TexelSet& texels, uint32_t a, uint32_t b) {
          std::abs(glm::dot(texels.geometricNormal[b], d)) <= 0.2f * distance;
 }
 
+// The ray from `from` to `to`, ending there; false when the two coincide.
+inline bool segment(glm::vec3 from, glm::vec3 to, Ray& ray) {
+  const glm::vec3 d = to - from;
+  const float length = glm::length(d);
+  if (!(length > 0.0f)) return false;
+  ray.origin = from;
+  ray.direction = d / length;
+  ray.tfar = length;
+  return true;
+}
+
 // The sight line from a point on a surface (normal na) to another on the same or a nearby
 // surface (nb), both lifted off their surfaces by a quarter of their distance, so the surface
 // itself does not block it when it curves within a normal cone; false when the two coincide
@@ -37,14 +48,7 @@ inline bool sameSurface(const TexelSet& texels, uint32_t a, uint32_t b) {
 // with it.
 inline bool liftedSightLine(glm::vec3 pa, glm::vec3 na, glm::vec3 pb, glm::vec3 nb, Ray& ray) {
   const float lift = 0.25f * glm::length(pb - pa);
-  const glm::vec3 from = pa + na * lift;
-  const glm::vec3 d = (pb + nb * lift) - from;
-  const float length = glm::length(d);
-  if (!(length > 0.0f)) return false;
-  ray.origin = from;
-  ray.direction = d / length;
-  ray.tfar = length;
-  return true;
+  return segment(pa + na * lift, pb + nb * lift, ray);
 }
 
 // texelAtUv as one table lookup per hit (the gather's hottest path after Embree): for every
@@ -116,15 +120,8 @@ struct TexelOfHit {
   // stand between them).
   static bool sightLine(const TexelSet& texels, uint32_t t, const Hit& hit, glm::vec3 hitPoint,
                         uint32_t target, Ray& ray) {
-    const glm::vec3 origin = from(texels, t, hit, hitPoint);
-    const glm::vec3 d =
-        (hit.frontFace ? texels.position[target] : texels.backPosition(target)) - origin;
-    const float length = glm::length(d);
-    if (!(length > 0.0f)) return false;
-    ray.origin = origin;
-    ray.direction = d / length;
-    ray.tfar = length;
-    return true;
+    return segment(from(texels, t, hit, hitPoint),
+                   hit.frontFace ? texels.position[target] : texels.backPosition(target), ray);
   }
 
   // The nearest valid neighbour of t in its chart that the hit point sees, or kNoTexel.
