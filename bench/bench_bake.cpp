@@ -7,7 +7,7 @@
 //       [--cluster-size M] [--cluster-texels N] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
 //       [--far-levels N] [--far-scale X] [--far-distance X] [--shared-far-span N] [--shared-far-points X]
 //       [--filter-passes N] [--filter-reach X] [--min-weight W] [--light-samples N] [--emissive-samples N]
-//       [--penumbra-samples N] [--worst N [--direct]] [--repeat N]
+//       [--penumbra-samples N] [--worst N [--direct]] [--repeat N] [--single-sided-emission]
 // SCENE defaults to the Cornell box of ../shared/scenes; --spp 0 only times the bake; --repeat
 // bakes N times and reports the fastest (for profiling and best-of-N timings).
 #include <algorithm>
@@ -64,7 +64,7 @@ int benchAccuracy(int argc, char** argv) {
       std::string(AFTERGLOW_SHARED_DIR) + "/scenes/cornell_box_mcguire/CornellBox-Original.gltf";
   float texelsPerUnit = 0.0f;
   int atlasSize = 256, threads = 2, spp = 16384, stride = 32, worst = 0, repeat = 1;
-  bool worstDirect = false;
+  bool worstDirect = false, singleSidedEmission = false;
   baker::BakeOptions options;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -77,6 +77,7 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--worst") worst = int(next());
     else if (arg == "--repeat") repeat = std::max(1, int(next()));
     else if (arg == "--direct") worstDirect = true;
+    else if (arg == "--single-sided-emission") singleSidedEmission = true;
     else if (arg == "--quality" && i + 1 < argc) {
       const std::string q = argv[++i];
       options = baker::bakePreset(q == "draft" ? baker::Quality::Draft
@@ -110,6 +111,8 @@ int benchAccuracy(int argc, char** argv) {
   Result<scenes::Scene> loaded = loadBenchScene(scenePath);
   if (!loaded) return fail(loaded.message());
   scenes::Scene& scene = loaded.value();
+  if (singleSidedEmission)
+    for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
   uv::UnwrapOptions unwrapOptions;
   if (atlasSize > 0) {
     Result<float> fitted = uv::fitTexelsPerUnit(scene, unwrapOptions, atlasSize);

@@ -34,5 +34,6 @@ int benchUv(int argc, char** argv);
 int benchAccuracy(int argc, char** argv);
 int benchBake(int argc, char** argv);
 int benchRuntime(int argc, char** argv);
+int benchViews(int argc, char** argv);
 
 }  // namespace afterglow::bench

@@ -4,6 +4,7 @@
 //   afterglow_bench bake [--threads 2] [--cornell-only | --sponza-only] [--quick]
 //   afterglow_bench runtime [--cornell-only | --sponza-only] [--repeat N]
 //   afterglow_bench accuracy [SCENE] [--texels-per-unit N] [--spp N] [--stride N] ...
+//   afterglow_bench views SCENE A.exr B.exr [--look-from X,Y,Z --look-at X,Y,Z --fov DEG]
 #include <cstdio>
 #include <cstring>
 
@@ -16,11 +17,13 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "accuracy") == 0) return benchAccuracy(argc, argv);
   if (std::strcmp(command, "bake") == 0) return benchBake(argc, argv);
   if (std::strcmp(command, "runtime") == 0) return benchRuntime(argc, argv);
+  if (std::strcmp(command, "views") == 0) return benchViews(argc, argv);
   std::fprintf(stderr,
-               "usage: afterglow_bench uv|bake|runtime|accuracy [options]\n"
+               "usage: afterglow_bench uv|bake|runtime|accuracy|views [options]\n"
                "  uv        lightmap UVs of Sponza: utilisation, stretch, time (issue 2)\n"
                "  bake      bake time, accuracy, ray throughput, memory (issue 3)\n"
                "  runtime   transport size and load, bounce and update times, one thread (issue 4)\n"
-               "  accuracy  a bake against the reference path tracer (Cornell box)\n");
+               "  accuracy  a bake against the reference path tracer (Cornell box)\n"
+               "  views     two linear pictures of one view (afterglow, Cycles) per material\n");
   return 2;
 }

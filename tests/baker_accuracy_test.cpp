@@ -1,5 +1,5 @@
 // The default bake against the reference path tracer on the measured Cornell box of
-// ../shared/scenes (McGuire's, with its emissive ceiling lamp), unwrapped into one 256² atlas:
+// ../shared/scenes (McGuire's, with its emissive ceiling lamp emitting downwards), unwrapped into one 256² atlas:
 // relative RMSE ≤ 3% over valid texels and mean bias ≤ 1%, for direct and for indirect light.
 // The errors are per texel and relative to the texel's own value (baker::compareToReference);
 // the reference runs 32768 paths per texel over every 32nd valid texel, so its own noise stays
@@ -23,6 +23,12 @@ TEST(BakeAccuracy, CornellBoxDefaultBakeMatchesTheReferencePathTracer) {
   Result<scenes::Scene> loaded = scenes::loadGltf(path);
   ASSERT_TRUE(loaded) << loaded.message();
   scenes::Scene scene = std::move(loaded.value());
+  // The lamp is a double-sided quad 1 cm below the ceiling, so by glTF its back lights the cavity
+  // above it, and some of that light escapes through the 1 cm slit around it. A path tracer
+  // finds that light only through the slit: at 32768 paths its own indirect noise is 5.6%,
+  // too much to judge a 3% error by. The lamp emits downwards only here; the cavity's light
+  // is checked by its power balance (baker_emission_test.cpp) and against Cycles (README).
+  for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
   uv::UnwrapOptions unwrap;
   Result<float> density = uv::fitTexelsPerUnit(scene, unwrap, 256);
   ASSERT_TRUE(density) << density.message();

@@ -65,6 +65,9 @@ const char kBakeHelp[] =
     "                           their far-cluster rays into one shared row (default 4; 0: off)\n"
     "  --shared-far-points X    rays a shared far row keeps, in gather points' rays (default 2)\n"
     "  --dilation N             texels each chart is grown into its padding (default 2)\n"
+    "  --single-sided-emission  double-sided emissive materials emit from their front only\n"
+    "                           (default: both sides, as glTF says); written on the output's\n"
+    "                           materials as extras.afterglow.singleSidedEmission\n"
     "  --reference              compute every texel with the reference path tracer instead\n"
     "                           (slow; for validating bakes: same outputs, no clusters)\n"
     "  --spp N                  paths per texel for --reference (default 1024)\n"
@@ -95,7 +98,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"sky-image"},         {"cluster-size"},    {"cluster-texels"},
     {"far-distance"},      {"shared-far-span"},  {"shared-far-points"}, {"dilation"},
     {"threads"},           {"settings"},        {"memory-budget"},
-    {"reference", 0, false}, {"spp"},
+    {"reference", 0, false}, {"spp"},       {"single-sided-emission", 0, false},
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
 
 // The settings file as `--name=value` arguments, placed before the command line's own so that
@@ -121,7 +124,8 @@ bool settingsArguments(const std::string& path, std::vector<std::string>* out,
     const nlohmann::json& v = it.value();
     std::string value;
     if (v.is_boolean()) {
-      if (key != "yes" && key != "quiet" && key != "reference") {
+      if (key != "yes" && key != "quiet" && key != "reference" &&
+          key != "single-sided-emission") {
         *error = path + ": '" + key + "' is not a flag";
         return false;
       }
@@ -287,6 +291,9 @@ int runBake(int argc, char** argv, int first) {
   }
   scenes::Scene& scene = loaded.value();
   info.warnings = scene.warnings;
+  const bool singleSidedEmission = args.has("single-sided-emission");
+  if (singleSidedEmission)
+    for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
 
   t0 = Clock::now();
   // Texel density: given, fitted to one atlas, or (by default) about kAutoTexels texels.
@@ -368,6 +375,7 @@ int runBake(int argc, char** argv, int first) {
                              {"clusterSize", options.clusters.clusterSize},
                              {"clusterTexels", options.clusters.clusterTexels},
                              {"dilation", options.dilation},
+                             {"singleSidedEmission", singleSidedEmission},
                              {"threads", threadCount()},
                              {"reference", options.reference},
                              {"referenceSpp", options.referenceOptions.samples},

@@ -450,6 +450,8 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
       clusters.albedo[c] = diffuseAlbedo(scene, mat, texels.uv0[members.front()]);
       clusters.emission[c] = emittedRadiance(scene, mat, texels.uv0[members.front()]);
     }
+    // A back-side cluster shows its material's emission only where the back emits.
+    if (back && !scene.material(mat).emitsFromBack()) clusters.emission[c] = glm::vec3(0.0f);
     clusters.back[c] = back ? 1 : 0;
   }, 64);
   return clusters;

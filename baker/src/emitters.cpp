@@ -24,7 +24,7 @@ std::vector<Emitter> collectEmitters(const scenes::Scene& scene) {
         slot = int(emitters.size());
         emitters.emplace_back();
         emitters.back().material = uint32_t(prim.material);
-        emitters.back().doubleSided = m.doubleSided && m.doubleSidedEmission;
+        emitters.back().doubleSided = m.emitsFromBack();
         emitters.back().textured = m.emissiveTexture.valid() &&
                                    size_t(m.emissiveTexture.texture) < scene.textures.size() &&
                                    scene.textures[size_t(m.emissiveTexture.texture)].loaded();

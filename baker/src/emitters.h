@@ -26,7 +26,7 @@ struct EmitterTriangle {
 // All emissive triangles of one material, over every instance.
 struct Emitter {
   uint32_t material = 0;
-  bool doubleSided = false;  // emits from both sides (Material::doubleSidedEmission)
+  bool doubleSided = false;  // emits from both sides (Material::emitsFromBack)
   bool textured = false;     // emissiveTexture set: the closed form does not apply
   std::vector<EmitterTriangle> triangles;
   std::vector<float> cdf;    // cumulative area, last entry = totalArea

@@ -81,6 +81,27 @@ struct TexelRays {
   uint32_t count = 0;
 };
 
+// Whether an emitter that shines on texel t covers its whole footprint within one texel edge:
+// a ray along the normal from each of the footprint's four corners hits, nearer than the edge,
+// emissive geometry whose side facing the texel emits (the back of a double-sided lamp panel
+// just below a ceiling).
+bool litCavity(const RayTracer& tracer, const TexelSet& texels, uint32_t t) {
+  const sampling::Frame frame(texels.normal[t]);
+  const float half = 0.5f * texels.edge[t];
+  for (const glm::vec2 corner : {glm::vec2(-1, -1), glm::vec2(1, -1), glm::vec2(1, 1),
+                                 glm::vec2(-1, 1)}) {
+    Ray ray;
+    ray.origin = texels.position[t] + half * (corner.x * frame.t + corner.y * frame.b);
+    ray.direction = texels.normal[t];
+    ray.tfar = texels.edge[t];
+    const Hit hit = tracer.intersect(ray);
+    if (!hit.valid()) return false;
+    const scenes::Material& m = tracer.material(hit);
+    if (!m.emissive() || !m.emitsFrom(hit.frontFace)) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tracer,
@@ -166,11 +187,16 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         const uint32_t u = batchTexels[i], n = firstCount[u];
         const GatherBatch::Summary sum =
             batch.summarize(tracer, batchFirst[i], batchFirst[i] + n, texels.edge[u]);
-        // Inside a wall, or wedged in a gap narrower than the texel (the 1 cm between a lamp
-        // and the ceiling): light there changes within the texel's footprint, more than one
-        // value can hold. No links, no sky; the lightmap fills it from its neighbours.
+        // Inside a wall, or wedged in a gap narrower than the texel (the floor under the rim
+        // of a box): light there changes within the texel's footprint, more than one value
+        // can hold. No links, no sky; the lightmap fills it from its neighbours. Burying loses
+        // only the little light that found its way into the gap, except where an emitter
+        // covers the texel (the ceiling above a double-sided lamp panel 1 cm below it, whose
+        // back glTF makes emit): there the cavity takes up a first-order share of the lamp's
+        // power, and passes some of it on through the gap, so the texel stays.
         if (float(sum.backfaces) > options.maxBackfaceFraction * float(n) ||
-            float(sum.close) >= options.maxEnclosedFraction * float(n)) {
+            (float(sum.close) >= options.maxEnclosedFraction * float(n) &&
+             !litCavity(tracer, texels, u))) {
           buried[u] = 1;
           continue;
         }

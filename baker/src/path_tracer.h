@@ -30,8 +30,8 @@ class PathTracer {
                       sampling::Rng& rng) const;
 
   // Radiance toward the camera along a primary ray, as `afterglow render` shades a bake:
-  // emission (front faces) plus diffuse albedo × one path's E/π at the first hit. Misses, back
-  // faces of single-sided geometry and dynamic instances are black.
+  // emission (where Material::emitsFrom says) plus diffuse albedo × one path's E/π at the first
+  // hit. Misses, back faces of single-sided geometry and dynamic instances are black.
   glm::vec3 cameraRadiance(const Ray& ray, glm::vec2 u, sampling::Rng& rng) const;
 
  private:

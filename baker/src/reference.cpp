@@ -144,7 +144,7 @@ PathTracer::Estimate PathTracer::irradiance(glm::vec3 p, glm::vec3 n, glm::vec3 
     if (!inst.isStatic) break;                       // dynamic: blocks, takes no part
     if (!hit.frontFace && !mat.doubleSided) break;   // inside a wall
     const glm::vec2 uv0 = tracer_.uv(hit, 0);
-    if (mat.emissive() && (hit.frontFace || mat.doubleSidedEmission)) {
+    if (mat.emissive() && mat.emitsFrom(hit.frontFace)) {
       const float pdfLight = emitterPdf(hit, dir);
       const float weight = pdfCosine > 0.0f ? pdfCosine / (pdfCosine + pdfLight) : 1.0f;
       bucket += throughput * emittedRadiance(scene_, material, uv0) * weight;
@@ -176,7 +176,8 @@ glm::vec3 PathTracer::cameraRadiance(const Ray& ray, glm::vec2 u, sampling::Rng&
   const scenes::Material& mat = scene_.material(material);
   if (!hit.frontFace && !mat.doubleSided) return glm::vec3(0.0f);
   const glm::vec2 uv0 = tracer_.uv(hit, 0);
-  glm::vec3 radiance = hit.frontFace ? emittedRadiance(scene_, material, uv0) : glm::vec3(0.0f);
+  glm::vec3 radiance =
+      mat.emitsFrom(hit.frontFace) ? emittedRadiance(scene_, material, uv0) : glm::vec3(0.0f);
   if (!inst.isStatic || inst.lightmap.atlas < 0) return radiance;
   const float side = hit.frontFace ? 1.0f : -1.0f;
   const glm::vec3 ng = hit.geometricNormal * side;

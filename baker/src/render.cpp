@@ -129,7 +129,7 @@ glm::vec3 bakedRadiance(const scenes::Scene& scene, const RayTracer& tracer,
   if (atlas >= 0 && size_t(atlas) < lightmaps.size() && lightmaps[size_t(atlas)].width > 0)
     light = fetch(lightmaps[size_t(atlas)], tracer.uv(hit, 1));
   glm::vec3 radiance = diffuseAlbedo(scene, material, uv0) * light;
-  if (hit.frontFace) radiance += emittedRadiance(scene, material, uv0);
+  if (mat.emitsFrom(hit.frontFace)) radiance += emittedRadiance(scene, material, uv0);
   return radiance;
 }
 

@@ -336,7 +336,7 @@ struct Exporter {
         jm["alphaMode"] = "BLEND";
       }
       if (mat.doubleSided) jm["doubleSided"] = true;
-      if (mat.doubleSidedEmission) jm["extras"]["afterglow"]["doubleSidedEmission"] = true;
+      if (mat.singleSidedEmission) jm["extras"]["afterglow"]["singleSidedEmission"] = true;
       materials.push_back(std::move(jm));
     }
     if (!materials.empty()) doc["materials"] = std::move(materials);

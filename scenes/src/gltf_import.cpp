@@ -831,9 +831,17 @@ class Importer {
       if (const tinygltf::Value* ag = member(src.extras, "afterglow")) {
         if (!ag->IsObject()) {
           warn(where + ": extras.afterglow is not an object, ignored");
-        } else if (const tinygltf::Value* v = member(*ag, "doubleSidedEmission")) {
-          if (v->IsBool()) m.doubleSidedEmission = v->Get<bool>();
-          else warn(where + ": extras.afterglow.doubleSidedEmission is not a boolean, ignored");
+        } else {
+          if (const tinygltf::Value* v = member(*ag, "singleSidedEmission")) {
+            if (v->IsBool()) m.singleSidedEmission = v->Get<bool>();
+            else warn(where + ": extras.afterglow.singleSidedEmission is not a boolean, ignored");
+          }
+          // Earlier versions emitted from the front only unless this was set; both sides are
+          // now the default, as glTF says.
+          if (member(*ag, "doubleSidedEmission"))
+            warn(where + ": extras.afterglow.doubleSidedEmission is obsolete and ignored: a "
+                         "doubleSided material emits from both sides unless "
+                         "extras.afterglow.singleSidedEmission is true");
         }
       }
       if (src.alphaMode == "MASK") m.alphaMode = AlphaMode::Mask;

@@ -57,17 +57,22 @@ struct Material {
   float emissiveStrength = 1.0f;        // KHR_materials_emissive_strength
   TextureRef emissiveTexture;
   bool doubleSided = false;
-  // extras.afterglow.doubleSidedEmission: an emissive double-sided surface emits from its back
-  // too. Off by default: glTF exporters mark most materials doubleSided (Blender does unless
-  // backface culling is set), and a lamp panel against a ceiling would otherwise pour light
-  // into the gap behind it; the back still reflects light as any double-sided surface does.
-  bool doubleSidedEmission = false;
+  // extras.afterglow.singleSidedEmission (or `afterglow bake --single-sided-emission` for every
+  // material): a double-sided emissive surface emits from its front only, for engines whose
+  // emissive shading ignores back faces. Off by default: glTF shades the back of a doubleSided
+  // material with the normal reversed, emission included, so its back glows in every viewer
+  // and in Cycles. The back still reflects light either way.
+  bool singleSidedEmission = false;
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f;  // used when alphaMode == Mask
 
   // Emitted radiance of an untextured point (W·sr⁻¹·m⁻² in glTF's photometric sense).
   glm::vec3 emission() const { return emissiveFactor * emissiveStrength; }
   bool emissive() const { return emission() != glm::vec3(0.0f); }
+  // Whether the back face emits: the one rule the direct light, the clusters, the reference
+  // path tracer and the renderer share.
+  bool emitsFromBack() const { return doubleSided && !singleSidedEmission; }
+  bool emitsFrom(bool frontFace) const { return frontFace || emitsFromBack(); }
 };
 
 // One triangle list with one material. Attribute arrays are per vertex; uv0/uv1 are empty when

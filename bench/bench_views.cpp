@@ -1,0 +1,136 @@
+// afterglow_bench views: two linear pictures of one view compared surface by surface, e.g.
+// `afterglow render -o view.exr` against an independent renderer's picture of the same glTF
+// view (../shared/tools/cycles_render.py renders it with Blender's Cycles). Each pixel is
+// assigned the material its centre ray hits, through the project's own ray tracer and camera;
+// pixels within two of a different material (or a miss) are left out, since renderers filter
+// pixels differently at edges (Cycles: a 1.5-pixel Blackman-Harris). Per material it prints
+// the mean luminance of both pictures and their ratio, and the ratio per channel.
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imageio.h>
+
+#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/render.h"
+#include "bench_common.h"
+
+namespace afterglow::bench {
+namespace {
+
+struct Picture {
+  int width = 0, height = 0;
+  std::vector<glm::vec3> rgb;  // row 0 at the top
+};
+
+Result<Picture> readPicture(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return Status::error(path + ": cannot read (" + OIIO::geterror() + ")");
+  const OIIO::ImageSpec spec = in->spec();
+  if (spec.nchannels < 3) return Status::error(path + ": fewer than 3 channels");
+  std::vector<float> all(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
+    return Status::error(path + ": " + in->geterror());
+  Picture p;
+  p.width = spec.width;
+  p.height = spec.height;
+  p.rgb.resize(size_t(p.width) * size_t(p.height));
+  for (size_t i = 0; i < p.rgb.size(); ++i)
+    p.rgb[i] = {all[i * size_t(spec.nchannels)], all[i * size_t(spec.nchannels) + 1],
+                all[i * size_t(spec.nchannels) + 2]};
+  return p;
+}
+
+bool parse3(const char* s, glm::vec3* v) {
+  return std::sscanf(s, "%f,%f,%f", &v->x, &v->y, &v->z) == 3;
+}
+
+float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+
+}  // namespace
+
+int benchViews(int argc, char** argv) {
+  if (argc < 5)
+    return fail("usage: afterglow_bench views SCENE.gltf A.exr B.exr [--look-from X,Y,Z "
+                "--look-at X,Y,Z] [--fov DEG] [--camera-index N]");
+  const std::string scenePath = argv[2], pathA = argv[3], pathB = argv[4];
+  glm::vec3 from(0.0f), at(0.0f, 0.0f, -1.0f);
+  float fovDeg = 45.0f;
+  bool look = false;
+  for (int i = 5; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--look-from") && parse3(argv[i + 1], &from)) look = true;
+    else if (!std::strcmp(argv[i], "--look-at") && parse3(argv[i + 1], &at)) look = true;
+    else if (!std::strcmp(argv[i], "--fov")) fovDeg = float(std::atof(argv[i + 1]));
+    else return fail(std::string("views: unknown option ") + argv[i]);
+  }
+  Result<scenes::Scene> scene = loadBenchScene(scenePath, false);
+  if (!scene) return fail(scene.message());
+  Result<Picture> a = readPicture(pathA), b = readPicture(pathB);
+  if (!a) return fail(a.message());
+  if (!b) return fail(b.message());
+  if (a->width != b->width || a->height != b->height)
+    return fail("views: the pictures differ in size");
+  baker::View view;
+  if (look) view = baker::lookAtView(from, at, fovDeg * 3.14159265f / 180.0f);
+  else if (!scene->cameras.empty()) view = baker::cameraView(scene->cameras.front());
+  else return fail("views: no --look-from/--look-at and no camera in the scene");
+  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene.value());
+  if (!tracer) return fail(tracer.message());
+
+  // The material each pixel's centre ray hits (-1: a miss), through the renderer's camera.
+  const int w = a->width, h = a->height;
+  const glm::vec3 right = glm::normalize(glm::cross(view.forward, view.up));
+  const float tanHalf = std::tan(0.5f * view.yfov), aspect = float(w) / float(h);
+  std::vector<int> material(size_t(w) * size_t(h), -1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      baker::Ray ray;
+      ray.origin = view.position;
+      const float cx = (2.0f * ((float(x) + 0.5f) / float(w)) - 1.0f) * tanHalf * aspect;
+      const float cy = (1.0f - 2.0f * ((float(y) + 0.5f) / float(h))) * tanHalf;
+      ray.direction = glm::normalize(view.forward + cx * right + cy * view.up);
+      const baker::Hit hit = tracer.value()->intersect(ray);
+      if (!hit.valid()) continue;
+      const scenes::Instance& inst = scene->instances[hit.instance];
+      material[size_t(y) * size_t(w) + size_t(x)] =
+          scene->meshes[size_t(inst.mesh)].primitives[hit.primitive].material;
+    }
+  struct Sums {
+    size_t pixels = 0;
+    glm::dvec3 a{0.0}, b{0.0};
+  };
+  std::map<int, Sums> sums;
+  constexpr int kMargin = 2;
+  for (int y = kMargin; y < h - kMargin; ++y)
+    for (int x = kMargin; x < w - kMargin; ++x) {
+      const int m = material[size_t(y) * size_t(w) + size_t(x)];
+      if (m < 0) continue;
+      bool inside = true;
+      for (int dy = -kMargin; dy <= kMargin && inside; ++dy)
+        for (int dx = -kMargin; dx <= kMargin && inside; ++dx)
+          inside = material[size_t(y + dy) * size_t(w) + size_t(x + dx)] == m;
+      if (!inside) continue;
+      Sums& s = sums[m];
+      const size_t i = size_t(y) * size_t(w) + size_t(x);
+      ++s.pixels;
+      s.a += glm::dvec3(a->rgb[i]);
+      s.b += glm::dvec3(b->rgb[i]);
+    }
+  std::printf("%-14s %7s %10s %10s %9s   %s\n", "material", "pixels", "A lum", "B lum", "A/B-1",
+              "A/B-1 per channel (r g b)");
+  for (const auto& [m, s] : sums) {
+    const glm::dvec3 ma = s.a / double(s.pixels), mb = s.b / double(s.pixels);
+    const double la = luminance(glm::vec3(ma)), lb = luminance(glm::vec3(mb));
+    std::printf("%-14s %7zu %10.5f %10.5f %+8.2f%%   %+.2f%% %+.2f%% %+.2f%%\n",
+                scene->material(m).name.c_str(), s.pixels, la, lb, 100.0 * (la / lb - 1.0),
+                100.0 * (ma.x / mb.x - 1.0), 100.0 * (ma.y / mb.y - 1.0),
+                100.0 * (ma.z / mb.z - 1.0));
+  }
+  return 0;
+}
+
+}  // namespace afterglow::bench
