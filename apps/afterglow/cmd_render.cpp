@@ -153,7 +153,7 @@ int runRender(int argc, char** argv, int first) {
 
   bool badArgument = false;
   Result<scenes::Scene> loaded = loadSceneArgument(input, true, &badArgument);
-  if (interrupted()) return kExitInterrupted;
+  if (interrupted()) return interruptedExit();
   if (!loaded) {
     printError(loaded.message());
     return badArgument ? kExitUsage : kExitBadInput;
@@ -166,6 +166,7 @@ int runRender(int argc, char** argv, int first) {
   if (int code = loadShading(input, scene, reference, quiet, &environment, &lightmaps);
       code != kExitOk)
     return code;
+  if (interrupted()) return interruptedExit();
 
   const float fovRad = fovDeg * 3.14159265f / 180.0f;
   baker::View view;
@@ -201,10 +202,7 @@ int runRender(int argc, char** argv, int first) {
       reference ? baker::renderReference(scene, *tracer.value(), environment, view, options, spp,
                                          progress)
                 : baker::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress);
-  if (interrupted() || progress.cancelled()) {
-    printError("interrupted; nothing written");
-    return kExitInterrupted;
-  }
+  if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!image) {
     printError(image.message());
     return kExitBadInput;

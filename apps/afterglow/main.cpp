@@ -46,6 +46,9 @@ const char kMainHelp[] =
 
 int main(int argc, char** argv) {
   using namespace afterglow::cli;
+  // Before anything else: a Ctrl-C from here on exits 130 with nothing written, whatever the
+  // command is doing (the commands check interrupted() before they write).
+  installInterruptHandler();
   if (argc < 2) {
     std::fprintf(stderr, "%s%s", kMainHelp, kExitCodesHelp);
     return kExitUsage;
