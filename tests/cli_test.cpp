@@ -8,9 +8,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
-#include <thread>
-
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -175,46 +172,20 @@ TEST(Cli, CtrlCExits130AndWritesNothing) {
   AG_REQUIRE_SHARED_SCENE(sponza, "sponza/Sponza.gltf");
   std::string dir = tempDir("cli_interrupt");
   const std::string out = dir + "/sponza.gltf";
-  int pipeFds[2];
-  ASSERT_EQ(pipe(pipeFds), 0);
-  pid_t pid = fork();
-  ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    int devnull = open("/dev/null", O_WRONLY);
-    dup2(devnull, 1);
-    dup2(pipeFds[1], 2);  // progress lines: one per stage as it ends
-    close(pipeFds[0]);
-    execl(AFTERGLOW_CLI, AFTERGLOW_CLI, "uv", sponza.c_str(), "-o", out.c_str(), "--threads", "2",
-          "--texels-per-unit", "32", static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  close(pipeFds[1]);
+  // Progress lines arrive one per stage as it ends.
+  CliChild child({"uv", sponza, "-o", out, "--threads", "2", "--texels-per-unit", "32"});
+  ASSERT_TRUE(child.started());
   // Interrupt once the charts are done, while it packs Sponza at 32 texels per metre (which
   // takes many seconds, so the signal always lands inside the packing).
-  std::string seen;
-  char buffer[256];
-  while (seen.find("charts") == std::string::npos) {
-    const ssize_t got = read(pipeFds[0], buffer, sizeof(buffer));
-    if (got <= 0) break;
-    seen.append(buffer, size_t(got));
-  }
-  ASSERT_NE(seen.find("charts"), std::string::npos) << seen;
+  ASSERT_TRUE(child.waitForStderr("charts")) << child.err();
   // Promptness in the child's processor time after the signal, not in wall time: with other
   // tests running beside this one, the child may wait seconds for a processor.
-  const double before = processorSeconds(pid);
+  const double before = processorSeconds(child.pid());
   ASSERT_GE(before, 0.0);
-  kill(pid, SIGINT);
-  // Keep reading until the child closes stderr, or its last words would meet a closed pipe.
-  while (read(pipeFds[0], buffer, sizeof(buffer)) > 0) {
-  }
-  close(pipeFds[0]);
-  int status = 0;
-  struct rusage usage {};
-  ASSERT_EQ(wait4(pid, &status, 0, &usage), pid);
-  const double total = double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-                       1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 130);
+  double total = 0.0;
+  const int status = child.interruptAndWait(&total);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status) << "\n" << child.err();
+  EXPECT_EQ(WEXITSTATUS(status), 130) << child.err();
   EXPECT_TRUE(filesIn(dir).empty());
   // Two threads for under two seconds.
   EXPECT_LT(total - before, 4.0) << "the packing did not stop promptly";

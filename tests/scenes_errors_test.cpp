@@ -203,7 +203,10 @@ TEST(GltfErrors, Extensions) {
   Level required;
   required.j["extensionsUsed"] = {"KHR_draco_mesh_compression"};
   required.j["extensionsRequired"] = {"KHR_draco_mesh_compression"};
-  expectError(load(required.text()), {"requires extension KHR_draco_mesh_compression"});
+  required.j["meshes"][0]["primitives"][0]["extensions"]["KHR_draco_mesh_compression"] = {
+      {"bufferView", 0}, {"attributes", {{"POSITION", 0}}}};
+  expectError(load(required.text()), {"requires extension KHR_draco_mesh_compression",
+                                      "meshes[0].primitives[0]"});
 
   Level supported;
   supported.j["extensionsUsed"] = {"KHR_texture_transform", "KHR_materials_clearcoat"};
@@ -217,6 +220,75 @@ TEST(GltfErrors, Extensions) {
   }
   EXPECT_EQ(extensionWarnings, 1);
   EXPECT_NE(r->warnings[0].find("level.gltf: extension KHR_materials_clearcoat"), std::string::npos);
+}
+
+// The number of warnings that mention every given fragment.
+int warningsWith(const Scene& scene, std::initializer_list<const char*> fragments) {
+  int n = 0;
+  for (const std::string& w : scene.warnings) {
+    bool all = true;
+    for (const char* f : fragments) all = all && w.find(f) != std::string::npos;
+    n += all;
+  }
+  return n;
+}
+
+// A required extension that nothing in the file uses (a real asset lists MSFT_texture_dds in
+// extensionsRequired only, and has no texture) loads with a warning naming file and extension;
+// so does one listed in extensionsUsed too but carried by no object, and one that appears only
+// inside extras (application data, not an extension).
+TEST(GltfErrors, UnusedRequiredExtensionsLoadWithAWarning) {
+  Level stale;
+  stale.j["extensionsRequired"] = {"MSFT_texture_dds"};
+  auto r = load(stale.text());
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_EQ(warningsWith(*r, {"level.gltf: ", "MSFT_texture_dds", "nothing in the file uses it"}),
+            1);
+  EXPECT_EQ(r->instancedTriangleCount(), 1u);
+
+  Level listed;
+  listed.j["extensionsUsed"] = {"KHR_draco_mesh_compression", "MSFT_texture_dds"};
+  listed.j["extensionsRequired"] = {"KHR_draco_mesh_compression", "MSFT_texture_dds"};
+  listed.j["materials"][0]["extras"]["extensions"]["MSFT_texture_dds"] = {{"source", 0}};
+  r = load(listed.text());
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_EQ(warningsWith(*r, {"level.gltf: ", "KHR_draco_mesh_compression", "nothing"}), 1);
+  EXPECT_EQ(warningsWith(*r, {"level.gltf: ", "MSFT_texture_dds", "nothing"}), 1);
+  // One warning per extension, not a second "used but ignored".
+  EXPECT_EQ(warningsWith(*r, {"extension"}), 2) << ::testing::PrintToString(r->warnings);
+}
+
+// A texture whose only image is given through an unsupported required extension cannot load:
+// refused, naming the file, the texture and the extension. With a plain `source` beside the
+// extension's alternative, the plain image is the fallback: loaded with a warning.
+TEST(GltfErrors, RequiredTextureExtensionsWithoutAFallbackAreRefused) {
+  Level onlyDds;
+  onlyDds.j["extensionsUsed"] = {"MSFT_texture_dds"};
+  onlyDds.j["extensionsRequired"] = {"MSFT_texture_dds"};
+  onlyDds.j["images"] = json::array({{{"uri", "stone.dds"}}});
+  onlyDds.j["textures"] = json::array(
+      {{{"name", "StoneDds"}, {"extensions", {{"MSFT_texture_dds", {{"source", 0}}}}}}});
+  onlyDds.j["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  expectError(load(onlyDds.text()), {"texture 0 'StoneDds'", "MSFT_texture_dds"});
+  // Not trusting extensionsUsed: the texture needs it even when the list leaves it out.
+  onlyDds.j.erase("extensionsUsed");
+  expectError(load(onlyDds.text()), {"texture 0 'StoneDds'", "MSFT_texture_dds"});
+
+  Level withPng;
+  withPng.j["extensionsUsed"] = {"MSFT_texture_dds"};
+  withPng.j["extensionsRequired"] = {"MSFT_texture_dds"};
+  withPng.j["images"] = json::array({{{"uri", "stone.png"}}, {{"uri", "stone.dds"}}});
+  withPng.j["textures"] = json::array(
+      {{{"source", 0}, {"extensions", {{"MSFT_texture_dds", {{"source", 1}}}}}}});
+  withPng.j["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", 0}};
+  scenes::LoadOptions noTextures;
+  noTextures.loadTextures = false;
+  auto r = loadGltfFromMemory(withPng.text(), "level.gltf", "/nonexistent-dir", noTextures);
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_EQ(warningsWith(*r, {"level.gltf: ", "MSFT_texture_dds", "texture 0 uses its plain source"}),
+            1);
+  ASSERT_EQ(r->textures.size(), 1u);
+  EXPECT_EQ(r->textures[0].uri, "stone.png");
 }
 
 TEST(GltfErrors, MismatchedAttributeCounts) {

@@ -4,6 +4,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -628,9 +629,13 @@ TEST(GltfImportShared, SponzaGeometry) {
 TEST(GltfImportShared, SponzaTexturesDecode) {
   AG_REQUIRE_SHARED_SCENE(path, "sponza/Sponza.gltf");
   const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpuStart = std::clock();
   auto r = loadGltf(path);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // The process's processor time (all threads): unlike wall time, it does not grow when other
+  // tests share the machine's cores.
+  const double cpuSeconds = double(std::clock() - cpuStart) / CLOCKS_PER_SEC;
   ASSERT_TRUE(r) << r.message();
   size_t loaded = 0, colour = 0;
   for (const Texture& t : r->textures) {
@@ -643,8 +648,9 @@ TEST(GltfImportShared, SponzaTexturesDecode) {
       EXPECT_TRUE(r->textures[size_t(m.baseColorTexture.texture)].loaded()) << m.name;
     }
   EXPECT_TRUE(r->warnings.empty()) << r->warnings.front();
-  EXPECT_LT(seconds, 60.0);
+  EXPECT_LT(cpuSeconds, 60.0) << seconds << " s wall";
   RecordProperty("load_seconds", std::to_string(seconds));
+  RecordProperty("load_cpu_seconds", std::to_string(cpuSeconds));
 }
 
 TEST(GltfImportShared, SponzaSunHasOneDirectionalLight) {

@@ -272,10 +272,6 @@ int runBake(int argc, char** argv, int first) {
 
   ConsoleProgress progress(stderr, quiet);
   InterruptGuard guard(progress);
-  auto interruptedExit = []() {
-    printError("interrupted; nothing written");
-    return int(kExitInterrupted);
-  };
   baker::BakeReportInfo info;
   info.version = AFTERGLOW_VERSION;
   info.input = input;

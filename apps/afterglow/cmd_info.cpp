@@ -179,6 +179,8 @@ int runInfo(int argc, char** argv, int first) {
   const std::string input = args.positional()[0];
   bool badArgument = false;
   Result<scenes::Scene> loaded = loadSceneArgument(input, !args.has("no-textures"), &badArgument);
+  // Loading a large level can take a while; a Ctrl-C during it stops here, before any output.
+  if (interrupted()) return interruptedExit();
   if (!loaded) {
     printError(loaded.message());
     return badArgument ? kExitUsage : kExitBadInput;

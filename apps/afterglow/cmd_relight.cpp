@@ -134,6 +134,7 @@ int runRelight(int argc, char** argv, int first) {
     return kExitBadInput;
   }
   const double loadSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (interrupted()) return interruptedExit();
 
   Result<std::string> gltfText = readFile((in / "scene.gltf").string());
   if (!gltfText) {
@@ -271,6 +272,7 @@ int runRelight(int argc, char** argv, int first) {
   update.maxBounces = bounces;
   update.fromScratch = true;
   const runtime::UpdateStats stats = rt->update(update);
+  if (interrupted()) return interruptedExit();
 
   AtomicOutput files;
   std::vector<glm::vec3> image;
@@ -324,6 +326,7 @@ int runRelight(int argc, char** argv, int first) {
                        {"updateMilliseconds", stats.milliseconds}};
   report["atlases"] = atlases;
   if (s) s = files.write((outDir / "report.json").string(), report.dump(2) + "\n");
+  if (s && interrupted()) return interruptedExit();
   if (s) s = files.commit();
   if (!s) {
     printError(s.message());

@@ -18,11 +18,13 @@
 namespace afterglow::cli {
 
 const char kRenderHelp[] =
-    "Usage: afterglow render SCENE.gltf -o VIEW.png [options]\n"
+    "Usage: afterglow render SCENE.gltf -o VIEW.png|VIEW.exr [options]\n"
     "\n"
     "Ray traces a view of a scene written by 'afterglow bake' and shades every visible surface\n"
     "with its diffuse albedo x its lightmap (the EXR files the bake wrote, found through the\n"
-    "glTF's MOZ_lightmap materials) + its emission, then tone maps to an sRGB PNG. Surfaces\n"
+    "glTF's MOZ_lightmap materials) + its emission. VIEW.png is tone mapped to sRGB; VIEW.exr\n"
+    "holds the linear picture as it is (32-bit float RGB radiance in the lightmaps' units, no\n"
+    "exposure or tone map, row 0 at the top), to compare with other renderers' EXRs. Surfaces\n"
     "without a lightmap (dynamic instances) show only their emission.\n"
     "With --reference it path-traces the same view instead, to compare with: each visible\n"
     "point is shaded the same way but with a path-traced estimate in place of its lightmap,\n"
@@ -30,14 +32,16 @@ const char kRenderHelp[] =
     "report.json beside SCENE.gltf; without one, a black sky and intensities 1).\n"
     "\n"
     "Options:\n"
-    "  -o, --output VIEW.png    output picture; required\n"
+    "  -o, --output VIEW.png|VIEW.exr\n"
+    "                           output picture, by its extension: tone-mapped PNG or linear\n"
+    "                           EXR; required\n"
     "  --camera NAME            view from the glTF camera NAME (default: the first camera)\n"
     "  --look-from X,Y,Z        view from this point (with --look-at) instead of a camera\n"
     "  --look-at X,Y,Z          point the view at this point\n"
     "  --fov DEG                vertical field of view in degrees (default: the camera's, or 45)\n"
     "  --width N, --height N    picture size in pixels (default 640 x 480)\n"
     "  --exposure X             scale by 2^X before tone mapping (default: automatic, the\n"
-    "                           99th percentile maps to 0.8)\n"
+    "                           99th percentile maps to 0.8); PNG only\n"
     "  --reference              path-trace the view instead of reading the lightmaps (slow)\n"
     "  --spp N                  paths per pixel for --reference (default 256)\n"
     "  --threads N              worker threads (default: every core); the picture is\n"
@@ -120,9 +124,12 @@ int runRender(int argc, char** argv, int first) {
   }
   if (args.positional().size() != 1) return usage("wants exactly one SCENE.gltf");
   const std::string input = args.positional()[0];
-  if (!args.has("output")) return usage("missing -o VIEW.png");
+  if (!args.has("output")) return usage("missing -o VIEW.png or -o VIEW.exr");
   const std::string output = args.get("output");
-  if (!endsWith(output, ".png")) return usage("the output must end in .png, got '" + output + "'");
+  const bool exr = endsWith(output, ".exr");
+  if (!exr && !endsWith(output, ".png"))
+    return usage("the output must end in .png (tone mapped) or .exr (linear), got '" + output +
+                 "'");
   baker::RenderOptions options;
   int threads = 0;
   int spp = 256;
@@ -136,6 +143,8 @@ int runRender(int argc, char** argv, int first) {
     return usage(args.error());
   if (args.has("exposure") && !args.getFloat("exposure", 0.0f, -100.0f, 100.0f, &exposure))
     return usage(args.error());
+  if (args.has("exposure") && exr)
+    return usage("--exposure sets the PNG's tone mapping; an EXR holds the picture unscaled");
   glm::vec3 from(0.0f), at(0.0f);
   const bool lookAt = args.has("look-from") || args.has("look-at");
   if (lookAt) {
@@ -153,7 +162,7 @@ int runRender(int argc, char** argv, int first) {
 
   bool badArgument = false;
   Result<scenes::Scene> loaded = loadSceneArgument(input, true, &badArgument);
-  if (interrupted()) return kExitInterrupted;
+  if (interrupted()) return interruptedExit();
   if (!loaded) {
     printError(loaded.message());
     return badArgument ? kExitUsage : kExitBadInput;
@@ -166,6 +175,7 @@ int runRender(int argc, char** argv, int first) {
   if (int code = loadShading(input, scene, reference, quiet, &environment, &lightmaps);
       code != kExitOk)
     return code;
+  if (interrupted()) return interruptedExit();
 
   const float fovRad = fovDeg * 3.14159265f / 180.0f;
   baker::View view;
@@ -201,17 +211,15 @@ int runRender(int argc, char** argv, int first) {
       reference ? baker::renderReference(scene, *tracer.value(), environment, view, options, spp,
                                          progress)
                 : baker::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress);
-  if (interrupted() || progress.cancelled()) {
-    printError("interrupted; nothing written");
-    return kExitInterrupted;
-  }
+  if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!image) {
     printError(image.message());
     return kExitBadInput;
   }
-  if (Status st = baker::writeRenderPng(output, options.width, options.height, image.value(),
-                                        exposure);
-      !st) {
+  const Status st =
+      exr ? baker::writeRenderExr(output, options.width, options.height, image.value())
+          : baker::writeRenderPng(output, options.width, options.height, image.value(), exposure);
+  if (!st) {
     printError(st.message());
     return kExitOutput;
   }

@@ -216,7 +216,7 @@ int runUv(int argc, char** argv, int first) {
   bool badArgument = false;
   Result<scenes::Scene> loaded = loadSceneArgument(input, false, &badArgument);
   timings.load = secondsSince(t0);
-  if (interrupted()) return kExitInterrupted;
+  if (interrupted()) return interruptedExit();
   if (!loaded) {
     printError(loaded.message());
     return badArgument ? kExitUsage : kExitBadInput;
@@ -224,10 +224,7 @@ int runUv(int argc, char** argv, int first) {
   scenes::Scene& scene = loaded.value();
 
   Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, options, progress);
-  if (interrupted() || progress.cancelled()) {
-    printError("interrupted; nothing written");
-    return kExitInterrupted;
-  }
+  if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!unwrapped) {
     printError(unwrapped.message());
     return kExitBadInput;
@@ -261,10 +258,7 @@ int runUv(int argc, char** argv, int first) {
     printError(st.message());
     return kExitOutput;
   }
-  if (interrupted()) {
-    printError("interrupted; nothing written");
-    return kExitInterrupted;
-  }
+  if (interrupted()) return interruptedExit();
   t0 = Clock::now();
   if (Status st = scenes::saveGltf(scene, output); !st) {
     printError(st.message());

@@ -1,5 +1,8 @@
 #include "common.h"
 
+#include <signal.h>
+
+#include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -7,6 +10,7 @@
 
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
+#include "args.h"
 
 namespace afterglow::cli {
 
@@ -59,27 +63,39 @@ Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextu
 }
 
 namespace {
-// Plain pointers and a sig_atomic_t: the handler may only touch lock-free state.
-Progress* volatile gProgress = nullptr;
+// Lock-free state only: the handler may run on any thread at any moment.
+std::atomic<Progress*> gProgress{nullptr};
 volatile std::sig_atomic_t gInterrupted = 0;
+static_assert(std::atomic<Progress*>::is_always_lock_free, "the SIGINT handler needs it");
 
 extern "C" void onInterrupt(int) {
   gInterrupted = 1;
-  if (gProgress) gProgress->cancel();
-  std::signal(SIGINT, SIG_DFL);
+  if (Progress* progress = gProgress.load()) progress->cancel();
+  // SA_RESETHAND has already put back the default action: a second Ctrl-C kills the process.
 }
 }  // namespace
 
-InterruptGuard::InterruptGuard(Progress& progress) {
-  gProgress = &progress;
-  std::signal(SIGINT, onInterrupt);
+void installInterruptHandler() {
+  struct sigaction action {};
+  action.sa_handler = onInterrupt;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESETHAND | SA_RESTART;
+  sigaction(SIGINT, &action, nullptr);
 }
 
-InterruptGuard::~InterruptGuard() {
-  std::signal(SIGINT, SIG_DFL);
-  gProgress = nullptr;
+InterruptGuard::InterruptGuard(Progress& progress) {
+  // Published before the check, so an interrupt arriving in between is seen by one or the other.
+  gProgress.store(&progress);
+  if (interrupted()) progress.cancel();
 }
+
+InterruptGuard::~InterruptGuard() { gProgress.store(nullptr); }
 
 bool interrupted() { return gInterrupted != 0; }
+
+int interruptedExit() {
+  printError("interrupted; nothing written");
+  return kExitInterrupted;
+}
 
 }  // namespace afterglow::cli

@@ -27,8 +27,15 @@ bool isBuiltinScene(const std::string& scene);
 Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextures,
                                         bool* usageError);
 
-// Ctrl-C handling: while a guard lives, SIGINT cancels the given Progress (the work stops at its
-// next check) and sets interrupted(). A second Ctrl-C kills the process the default way.
+// Ctrl-C handling. installInterruptHandler(), first thing in main, makes the first SIGINT only
+// record the interrupt (interrupted() turns true) and cancel the Progress of the living
+// InterruptGuard, if any; it also puts back the default action, so a second Ctrl-C kills the
+// process. Every command that writes output checks interrupted() before it starts writing (and
+// before it commits), so an interrupt at any point, loading included, exits 130 with nothing
+// written.
+void installInterruptHandler();
+// While a guard lives, SIGINT cancels the given Progress (the work stops at its next check). A
+// guard made after an interrupt cancels its Progress at once.
 class InterruptGuard {
  public:
   explicit InterruptGuard(Progress& progress);
@@ -37,5 +44,7 @@ class InterruptGuard {
   InterruptGuard& operator=(const InterruptGuard&) = delete;
 };
 bool interrupted();
+// Prints "interrupted; nothing written" and returns kExitInterrupted (130).
+int interruptedExit();
 
 }  // namespace afterglow::cli

@@ -28,8 +28,8 @@ const char kMainHelp[] =
     "  uv SCENE -o OUT.gltf   generate (or check) lightmap UVs and pack them into atlases\n"
     "  info SCENE             print what afterglow loads from a scene\n"
     "  bake SCENE -o OUT/     bake lightmaps (EXR + PNG), a glTF using them, and a report\n"
-    "  render SCENE.gltf -o VIEW.png\n"
-    "                         ray trace a view of a baked scene\n"
+    "  render SCENE.gltf -o VIEW.png|VIEW.exr\n"
+    "                         ray trace a view of a baked scene (tone mapped or linear)\n"
     "  relight OUT/ -o RELIT/ new lightmaps from a bake's transport with changed lights,\n"
     "                         sky, albedo or emission (the runtime's re-solve)\n"
     "\n"
@@ -46,6 +46,9 @@ const char kMainHelp[] =
 
 int main(int argc, char** argv) {
   using namespace afterglow::cli;
+  // Before anything else: a Ctrl-C from here on exits 130 with nothing written, whatever the
+  // command is doing (the commands check interrupted() before they write).
+  installInterruptHandler();
   if (argc < 2) {
     std::fprintf(stderr, "%s%s", kMainHelp, kExitCodesHelp);
     return kExitUsage;

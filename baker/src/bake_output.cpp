@@ -169,8 +169,9 @@ float autoExposure(const std::vector<glm::vec3>& pixels, const std::vector<uint8
 }
 
 Status writeExr(const std::string& path, int width, int height,
-                const std::vector<glm::vec3>& pixels, AtomicOutput& out) {
-  OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::HALF);
+                const std::vector<glm::vec3>& pixels, AtomicOutput& out, ExrPixels pixelType) {
+  OIIO::ImageSpec spec(width, height, 3,
+                       pixelType == ExrPixels::Float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::HALF);
   spec.attribute("compression", "zip");
   return writeImage(path, "exr", spec, OIIO::TypeDesc::FLOAT, pixels.data(), out);
 }

@@ -320,4 +320,11 @@ Status writeRenderPng(const std::string& path, int width, int height,
   return out.commit();
 }
 
+Status writeRenderExr(const std::string& path, int width, int height,
+                      const std::vector<glm::vec3>& image) {
+  AtomicOutput out;
+  if (Status s = writeExr(path, width, height, image, out, ExrPixels::Float); !s) return s;
+  return out.commit();
+}
+
 }  // namespace afterglow::baker

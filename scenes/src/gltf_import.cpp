@@ -170,8 +170,7 @@ Status checkGlbContainer(const std::string& bytes, const std::string& file, size
 // tinygltf 2.7 takes the address of an image's bufferView bytes before anyone checks that the
 // bufferView lies inside its buffer (pointer overflow for absurd offsets). Buffers always end up
 // exactly as long as their declared byteLength, so the declared numbers are checked up front.
-Status checkImageBufferViews(const char* text, size_t length, const std::string& file) {
-  const nlohmann::json root = nlohmann::json::parse(text, text + length, nullptr, false);
+Status checkImageBufferViews(const nlohmann::json& root, const std::string& file) {
   if (root.is_discarded() || !root.is_object()) return Status::ok();  // tinygltf reports it
   auto array = [&](const char* key) -> const nlohmann::json* {
     auto it = root.find(key);
@@ -211,6 +210,51 @@ Status checkImageBufferViews(const char* text, size_t length, const std::string&
                                   (unsigned long long)bufferLength));
   }
   return Status::ok();
+}
+
+// An object of the file that carries an extension in its `extensions` object.
+struct ExtensionCarrier {
+  std::string where;  // "textures[2]", "meshes[0].primitives[1]", "the document"
+  int texture = -1;   // the index when the carrier is an entry of the top-level textures
+};
+using ExtensionCarriers = std::map<std::string, std::vector<ExtensionCarrier>>;
+
+// Every object that carries one of `wanted` in its `extensions` object, searched in the raw JSON
+// so that no object kind is missed (tinygltf keeps `extensions` on some objects only). Values
+// under `extras` are application data, not extensions, and are not searched. The depth is
+// bounded by jsonTooDeep() before this runs.
+void findExtensionCarriers(const nlohmann::json& value, const std::string& where, int texture,
+                           const std::set<std::string>& wanted, ExtensionCarriers& out) {
+  if (value.is_array()) {
+    for (size_t i = 0; i < value.size(); ++i)
+      findExtensionCarriers(value[i], where + "[" + std::to_string(i) + "]",
+                            where == "textures" ? int(i) : -1, wanted, out);
+    return;
+  }
+  if (!value.is_object()) return;
+  for (auto it = value.begin(); it != value.end(); ++it) {
+    if (it.key() == "extras") continue;
+    if (it.key() == "extensions" && it->is_object())
+      for (auto ext = it->begin(); ext != it->end(); ++ext)
+        if (wanted.count(ext.key()))
+          out[ext.key()].push_back({where.empty() ? "the document" : where, texture});
+    findExtensionCarriers(*it, where.empty() ? it.key() : where + "." + it.key(), -1, wanted,
+                          out);
+  }
+}
+
+// The carriers of every extension the file requires that afterglow does not support.
+ExtensionCarriers unsupportedRequiredExtensions(const nlohmann::json& root) {
+  ExtensionCarriers carriers;
+  if (!root.is_object()) return carriers;
+  auto required = root.find("extensionsRequired");
+  if (required == root.end() || !required->is_array()) return carriers;
+  std::set<std::string> wanted;
+  for (const nlohmann::json& ext : *required)
+    if (ext.is_string() && !supportedExtensions().count(ext.get<std::string>()))
+      wanted.insert(ext.get<std::string>());
+  if (!wanted.empty()) findExtensionCarriers(root, "", -1, wanted, carriers);
+  return carriers;
 }
 
 // tinygltf hands us image bytes it decoded from data: URIs; we keep them and decode later with
@@ -275,8 +319,13 @@ struct PendingTexture {
 class Importer {
  public:
   Importer(const tinygltf::Model& model, const std::string& file, const std::string& baseDir,
-           const LoadOptions& options, Scene& scene)
-      : model_(model), file_(file), baseDir_(baseDir), options_(options), scene_(scene) {}
+           const LoadOptions& options, const ExtensionCarriers& carriers, Scene& scene)
+      : model_(model),
+        file_(file),
+        baseDir_(baseDir),
+        options_(options),
+        carriers_(carriers),
+        scene_(scene) {}
 
   Status run() {
     Status s = checkExtensions();
@@ -304,12 +353,53 @@ class Importer {
 
   // ---- extensions ---------------------------------------------------------------------------
 
+  // A required extension afterglow does not support refuses the file only when something in it
+  // really uses it. Whether it is used is judged by the objects that carry it in their
+  // `extensions` (the extensionsUsed list is not trusted either way):
+  //  - carried by nothing: a stale entry in extensionsRequired; warn and load.
+  //  - carried only by textures that also have a plain `source` (an alternative image, e.g. a DDS
+  //    beside a PNG): warn and load the plain source, the fallback the extension stands beside.
+  //  - carried by anything else, or by a texture whose only image is in the extension: refuse,
+  //    naming the texture or the object.
   Status checkExtensions() {
-    for (const std::string& ext : model_.extensionsRequired)
-      if (!supportedExtensions().count(ext))
-        return fail("requires extension " + ext + ", which afterglow does not support");
+    std::set<std::string> reported;
+    for (const std::string& ext : model_.extensionsRequired) {
+      if (supportedExtensions().count(ext) || !reported.insert(ext).second) continue;
+      auto found = carriers_.find(ext);
+      if (found == carriers_.end() || found->second.empty()) {
+        warn("requires extension " + ext + ", which afterglow does not support, but nothing in "
+             "the file uses it; loaded without it");
+        continue;
+      }
+      std::vector<int> fallbacks;
+      for (const ExtensionCarrier& c : found->second) {
+        const bool texture = c.texture >= 0 && size_t(c.texture) < model_.textures.size();
+        if (texture && model_.textures[size_t(c.texture)].source >= 0) {
+          fallbacks.push_back(c.texture);
+          continue;
+        }
+        if (texture) {
+          const std::string& name = model_.textures[size_t(c.texture)].name;
+          return fail(format("texture %d%s has its only image in extension %s, which afterglow "
+                             "does not support (the file requires it)",
+                             c.texture, name.empty() ? "" : (" '" + name + "'").c_str(),
+                             ext.c_str()));
+        }
+        return fail("requires extension " + ext + ", which afterglow does not support (used by " +
+                    c.where + ")");
+      }
+      std::string list;
+      for (size_t i = 0; i < fallbacks.size() && i < 8; ++i)
+        list += (i ? ", " : "") + std::to_string(fallbacks[i]);
+      if (fallbacks.size() > 8) list += ", ...";
+      warn(format("requires extension %s, which afterglow does not support; it only gives "
+                  "alternative images, so texture%s %s use%s %s plain source",
+                  ext.c_str(), fallbacks.size() > 1 ? "s" : "", list.c_str(),
+                  fallbacks.size() > 1 ? "" : "s", fallbacks.size() > 1 ? "their" : "its"));
+    }
     for (const std::string& ext : model_.extensionsUsed)
-      if (!supportedExtensions().count(ext)) warn("extension " + ext + " is used but ignored");
+      if (!supportedExtensions().count(ext) && !reported.count(ext))
+        warn("extension " + ext + " is used but ignored");
     return Status::ok();
   }
 
@@ -1178,6 +1268,7 @@ class Importer {
   std::string file_;
   std::string baseDir_;
   LoadOptions options_;
+  const ExtensionCarriers& carriers_;  // unsupported required extensions' carriers
   Scene& scene_;
   std::vector<int> usedMeshes_;
   std::map<TextureKey, int> textureSlots_;
@@ -1200,8 +1291,15 @@ Result<Scene> loadGltfFromMemory(const std::string& bytes, const std::string& na
     return Result<Scene>::error(format("%s: malformed JSON: nested deeper than %d levels",
                                        file.c_str(), kMaxJsonDepth));
 
-  Status images = checkImageBufferViews(bytes.data() + jsonOffset, jsonLength, file);
-  if (!images) return images;
+  ExtensionCarriers carriers;
+  {
+    // Parsed here for the checks tinygltf does not make, and freed before tinygltf parses it.
+    const nlohmann::json root = nlohmann::json::parse(
+        bytes.data() + jsonOffset, bytes.data() + jsonOffset + jsonLength, nullptr, false);
+    Status images = checkImageBufferViews(root, file);
+    if (!images) return images;
+    carriers = unsupportedRequiredExtensions(root);
+  }
 
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keepImageBytes, nullptr);
@@ -1232,7 +1330,7 @@ Result<Scene> loadGltfFromMemory(const std::string& bytes, const std::string& na
 
   Scene scene;
   scene.sourcePath = nameForMessages;
-  Importer importer(model, file, baseDir, options, scene);
+  Importer importer(model, file, baseDir, options, carriers, scene);
   Status s;
   try {
     s = importer.run();

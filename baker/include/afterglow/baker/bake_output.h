@@ -31,9 +31,13 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
                                                   const std::string& outDir,
                                                   const BakeReportInfo& info, AtomicOutput& out);
 
-// Linear half-float RGB EXR, row 0 = v 0 (glTF's image orientation).
+// How an EXR stores its channels: half floats (lightmaps) or 32-bit floats (renders compared
+// with other renderers' float EXRs).
+enum class ExrPixels { Half, Float };
+// Linear RGB EXR (zip compressed), row 0 = v 0 (glTF's image orientation; the top row).
 Status writeExr(const std::string& path, int width, int height,
-                const std::vector<glm::vec3>& pixels, AtomicOutput& out);
+                const std::vector<glm::vec3>& pixels, AtomicOutput& out,
+                ExrPixels pixelType = ExrPixels::Half);
 // 8-bit sRGB PNG from linear RGB: pixels × exposure, Reinhard tone map, sRGB encode.
 Status writeTonemappedPng(const std::string& path, int width, int height,
                           const std::vector<glm::vec3>& pixels, float exposure,

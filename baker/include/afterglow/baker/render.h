@@ -83,5 +83,10 @@ Result<Environment> loadBakeEnvironment(const std::string& gltfPath, bool* repor
 // maps to 0.8 after the tone curve); otherwise the image is scaled by 2^exposureStops.
 Status writeRenderPng(const std::string& path, int width, int height,
                       const std::vector<glm::vec3>& image, float exposureStops);
+// Writes the linear picture as it is (radiance: albedo x E/pi + emission, the lightmaps'
+// units; no exposure, tone map or sRGB) to a 32-bit float RGB EXR atomically, row 0 at the top
+// as in the PNG: what other renderers (e.g. Blender Cycles) write for the same view.
+Status writeRenderExr(const std::string& path, int width, int height,
+                      const std::vector<glm::vec3>& image);
 
 }  // namespace afterglow::baker
