@@ -1,19 +1,24 @@
 // The whole bake (texels, clusters, links, direct, solve, dilation) on closed and small scenes
-// with known answers: the white furnace, bounce intensity 0, linearity in a light's intensity,
+// with known answers: the white furnace (built in code, and as a glTF level with
+// KHR_materials_specular), bounce intensity 0, linearity in a light's intensity,
 // and bit-identical output whatever the thread count.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <string>
 #include <thread>
 #include <vector>
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "afterglow/baker/bake.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/solver.h"
+#include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
 #include "afterglow/uv/unwrap.h"
 #include "../baker/src/lightmap_post.h"
@@ -70,12 +75,15 @@ TEST_P(WhiteFurnace, EveryValidTexelIsLeOverOneMinusAlbedo) {
   f.albedo = glm::vec3(albedo);
   f.emission = glm::vec3(1.0f);
   scenes::Scene scene = scenes::makeFurnaceBox(f);
-  // ρ is the diffuse albedo the baker reflects with, which adds Unity's meta-pass specular
-  // share (0.02 for this dielectric) to the base colour: take it off the base colour.
-  for (int m = 0; m < int(scene.materials.size()); ++m) {
-    const glm::vec3 share = diffuseAlbedo(scene, m, glm::vec2(0.0f)) -
-                            glm::vec3(scene.materials[size_t(m)].baseColorFactor);
-    scene.materials[size_t(m)].baseColorFactor = glm::vec4(glm::vec3(albedo) - share, 1.0f);
+  // ρ is the bounce albedo the baker reflects with, which scales the base colour by 1 − F0 and
+  // adds Unity's meta-pass specular share (0.02 for this dielectric): for metallic 0 it is
+  // affine in the base colour, so pick the base colour that gives ρ.
+  for (scenes::Material& m : scene.materials) {
+    m.baseColorFactor = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    const glm::vec3 a0 = diffuseAlbedoFactor(m);
+    m.baseColorFactor = glm::vec4(1.0f);
+    const glm::vec3 a1 = diffuseAlbedoFactor(m);
+    m.baseColorFactor = glm::vec4((glm::vec3(albedo) - a0) / (a1 - a0), 1.0f);
   }
   for (int m = 0; m < int(scene.materials.size()); ++m)
     ASSERT_NEAR(diffuseAlbedo(scene, m, glm::vec2(0.0f)).x, albedo, 1e-6f);
@@ -109,6 +117,148 @@ TEST_P(WhiteFurnace, EveryValidTexelIsLeOverOneMinusAlbedo) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Albedo, WhiteFurnace, ::testing::Values(0.5f, 0.9f));
+
+// The white furnace as a level: the procedural box written through the exporter, its one
+// material's KHR_materials_specular put into the JSON by hand (when `specular` is not null),
+// loaded back from the file and unwrapped coarsely.
+scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohmann::json& specular) {
+  scenes::FurnaceOptions f;
+  f.albedo = glm::vec3(baseColor);
+  f.emission = glm::vec3(1.0f);
+  const std::string path = test::tempDir("furnace_level_" + name) + "/furnace.gltf";
+  Status saved = scenes::saveGltf(scenes::makeFurnaceBox(f), path);
+  EXPECT_TRUE(saved) << saved.message();
+  nlohmann::json doc = nlohmann::json::parse(test::slurp(path));
+  EXPECT_EQ(doc["materials"].size(), 1u);
+  if (!specular.is_null()) {
+    doc["materials"][0]["extensions"]["KHR_materials_specular"] = specular;
+    doc["extensionsUsed"].push_back("KHR_materials_specular");
+  }
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << doc.dump(1);
+  }
+  Result<scenes::Scene> loaded = scenes::loadGltf(path);
+  EXPECT_TRUE(loaded) << loaded.message();
+  if (!loaded) return {};
+  scenes::Scene scene = std::move(loaded.value());
+  for (const std::string& w : scene.warnings) ADD_FAILURE() << "warning: " << w;
+  EXPECT_EQ(scene.materials.size(), 1u);
+  unwrapAt(scene, 4.0f);
+  return scene;
+}
+
+// Every valid texel of a bake, per channel.
+template <class F>
+size_t forEachValidTexel(const BakeResult& r, F f) {
+  size_t n = 0;
+  for (size_t a = 0; a < r.lightmaps.size(); ++a) {
+    const runtime::AtlasLayout& layout = r.texels.atlases[a];
+    for (size_t p = 0; p < layout.texelOfPixel.size(); ++p) {
+      const uint32_t t = layout.texelOfPixel[p];
+      if (t == runtime::kNoTexel || !r.texels.valid[t]) continue;
+      for (int k = 0; k < 3; ++k) f(r.lightmaps[a][p][k]);
+      ++n;
+    }
+  }
+  return n;
+}
+
+BakeOptions furnaceLevelOptions() {
+  // As many samples as the procedural furnace above (the small level keeps it fast): the
+  // direct light's noise must stay well inside 1%.
+  BakeOptions options = draftOptions();
+  options.links.texelRays = 256;
+  options.links.clusterRays = 1024;
+  options.direct.emissiveSamples = 4096;
+  return options;
+}
+
+// specularFactor 0 makes the level's walls Lambertian: ρ is the base colour, and the furnace
+// holds Le / (1 − ρ) everywhere.
+class FurnaceLevel : public ::testing::TestWithParam<float> {};
+
+TEST_P(FurnaceLevel, SpecularZeroIsLeOverOneMinusBaseColour) {
+  const float rho = GetParam();
+  const scenes::Scene scene =
+      furnaceLevel(std::to_string(int(rho * 100)), rho, {{"specularFactor", 0.0}});
+  ASSERT_EQ(scene.materials.size(), 1u);
+  ASSERT_EQ(scene.materials[0].specularFactor, 0.0f);
+  ASSERT_EQ(diffuseAlbedo(scene, 0, glm::vec2(0.5f)), glm::vec3(rho));
+  BakeOptions options = furnaceLevelOptions();
+  options.solve.tolerance = 1e-6f;
+  const BakeResult r = bakeOrDie(scene, options);
+  ASSERT_GT(r.texels.size(), 50u);
+  const float expected = 1.0f / (1.0f - rho);
+  float worst = 0.0f, sum = 0.0f;
+  const size_t checked = forEachValidTexel(r, [&](float v) {
+    worst = std::max(worst, std::abs(v / expected - 1.0f));
+    sum += v;
+  });
+  EXPECT_GT(checked, r.texels.size() * 9 / 10);
+  EXPECT_LT(worst, 0.01f) << "worst relative error over " << checked << " texels";
+  std::printf("furnace level, base %.2f, specular 0: mean %.4f, Le/(1-rho) %.4f, worst %.4f\n",
+              rho, sum / float(3 * checked), expected, worst);
+}
+
+INSTANTIATE_TEST_SUITE_P(BaseColour, FurnaceLevel, ::testing::Values(0.5f, 0.9f));
+
+// With glTF's default specular, a bright dielectric keeps 4% of the light out of the diffuse
+// part: a base colour of 0.98 stays below Le / (1 − 0.98) (the old meta-pass albedo, 0.98 +
+// 0.02 = 1.0, never converged).
+TEST(FurnaceLevelDefaultSpecular, BaseColour098StaysBelowItsLambertianFurnace) {
+  const scenes::Scene scene = furnaceLevel("98", 0.98f, nullptr);
+  ASSERT_EQ(scene.materials.size(), 1u);
+  const float albedo = diffuseAlbedo(scene, 0, glm::vec2(0.5f)).x;
+  EXPECT_NEAR(albedo, 0.98f * 0.96f + 0.02f, 1e-6f);
+  const BakeResult r = bakeOrDie(scene, furnaceLevelOptions());
+  ASSERT_GT(r.texels.size(), 50u);
+  const float bound = 1.0f / (1.0f - 0.98f);
+  const float limit = 1.0f / (1.0f - albedo);
+  float highest = 0.0f, lowest = 1e30f;
+  const size_t checked = forEachValidTexel(r, [&](float v) {
+    ASSERT_TRUE(std::isfinite(v));
+    highest = std::max(highest, v);
+    lowest = std::min(lowest, v);
+  });
+  EXPECT_GT(checked, r.texels.size() * 9 / 10);
+  EXPECT_LT(highest, bound);
+  // And it is the furnace of its own albedo (the solve stops within 0.1% per pass, so a few
+  // percent short of the limit).
+  EXPECT_LT(highest, limit * 1.01f);
+  EXPECT_GT(lowest, limit * 0.9f);
+  std::printf("furnace level, base 0.98: albedo %.4f, texels %.3f..%.3f, Le/(1-albedo) %.3f\n",
+              albedo, lowest, highest, limit);
+}
+
+// A white level (base colour 1, default specular) converges: the solve stops before its pass
+// limit with finite texels no brighter than Le / (1 − albedo).
+TEST(FurnaceLevelDefaultSpecular, WhiteConverges) {
+  const scenes::Scene scene = furnaceLevel("white", 1.0f, nullptr);
+  ASSERT_EQ(scene.materials.size(), 1u);
+  const float albedo = diffuseAlbedo(scene, 0, glm::vec2(0.5f)).x;
+  ASSERT_LT(albedo, 1.0f);
+  const BakeOptions options = furnaceLevelOptions();
+  const BakeResult r = bakeOrDie(scene, options);
+  ASSERT_GT(r.texels.size(), 50u);
+  const float limit = 1.0f / (1.0f - albedo);
+  float highest = 0.0f;
+  const size_t checked = forEachValidTexel(r, [&](float v) {
+    ASSERT_TRUE(std::isfinite(v));
+    highest = std::max(highest, v);
+  });
+  EXPECT_GT(checked, r.texels.size() * 9 / 10);
+  EXPECT_LE(highest, limit);
+  // The bake's solve, run again on its transport: it stops on the tolerance, not the limit.
+  runtime::Solver solver(r.transport);
+  solver.prepare();
+  solver.reset();
+  const int passes = solver.solve(options.solve);
+  EXPECT_GT(passes, 10);
+  EXPECT_LT(passes, 1000);
+  std::printf("furnace level, base 1: albedo %.4f, highest texel %.3f, Le/(1-albedo) %.3f, "
+              "%d passes\n", albedo, highest, limit, passes);
+}
 
 TEST(Bake, BounceIntensityZeroGivesDirectLightOnly) {
   scenes::Scene scene = sunlitCornell(3.0f, 0.0f);

@@ -413,8 +413,8 @@ TEST(BakerClusters, FurnaceBoxHasFourClustersPerFace) {
   EXPECT_EQ(clusters.size(), 24u);
   for (uint32_t c = 0; c < clusters.size(); ++c) {
     EXPECT_NEAR(clusters.area[c], 0.25f, 0.02f) << c;
-    // Rough white dielectric: 0.5 + 0.04 · 1² · 0.5 (the meta pass's specular share).
-    EXPECT_NEAR(clusters.albedo[c].x, 0.52f, 1e-5f);
+    // Rough dielectric: 0.5 · (1 − 0.04) + 0.04 · 1² · 0.5 (the meta pass's specular share).
+    EXPECT_NEAR(clusters.albedo[c].x, 0.5f * 0.96f + 0.02f, 1e-5f);
     EXPECT_NEAR(clusters.emission[c].x, 2.0f, 1e-5f);
     EXPECT_NEAR(clusters.emission[c].y, 1.0f, 1e-5f);
     EXPECT_NEAR(clusters.emission[c].z, 0.5f, 1e-5f);
@@ -500,20 +500,21 @@ TEST(BakerClusters, DiffuseAlbedoAndEmission) {
   auto near = [](glm::vec3 a, glm::vec3 b) { return glm::length(a - b) < 1e-6f; };
   // Polished metal reflects nothing diffusely.
   EXPECT_TRUE(near(diffuseAlbedo(scene, add(1.0f, 0.0f, glm::vec3(1.0f)), uv), glm::vec3(0.0f)));
-  // White dielectric: 1 + 0.04 · roughness² · 0.5.
-  EXPECT_TRUE(near(diffuseAlbedo(scene, add(0.0f, 1.0f, glm::vec3(1.0f)), uv), glm::vec3(1.02f)));
-  EXPECT_TRUE(near(diffuseAlbedo(scene, add(0.0f, 0.5f, glm::vec3(1.0f)), uv), glm::vec3(1.005f)));
-  EXPECT_TRUE(near(diffuseAlbedo(scene, add(0.0f, 0.0f, glm::vec3(0.3f)), uv), glm::vec3(0.3f)));
+  // White dielectric: 1 − 0.04 (the dielectric reflectance) + 0.04 · roughness² · 0.5.
+  EXPECT_TRUE(near(diffuseAlbedo(scene, add(0.0f, 1.0f, glm::vec3(1.0f)), uv), glm::vec3(0.98f)));
+  EXPECT_TRUE(near(diffuseAlbedo(scene, add(0.0f, 0.5f, glm::vec3(1.0f)), uv), glm::vec3(0.965f)));
+  EXPECT_TRUE(near(diffuseAlbedo(scene, add(0.0f, 0.0f, glm::vec3(0.3f)), uv), glm::vec3(0.288f)));
   // Rough metal: only the specular share, half its colour.
   EXPECT_TRUE(near(diffuseAlbedo(scene, add(1.0f, 1.0f, {0.8f, 0.4f, 0.2f}), uv),
                    glm::vec3(0.4f, 0.2f, 0.1f)));
   // glTF's default material is fully metallic and rough, white: 0.5.
   EXPECT_TRUE(near(diffuseAlbedo(scene, -1, uv), glm::vec3(0.5f)));
 
-  // Textures multiply their factors; metallic-roughness reads B and G.
+  // Textures multiply their factors; metallic-roughness reads B and G, the specular texture A,
+  // the specular colour texture RGB.
   scenes::Texture tex;
   tex.width = tex.height = 1;
-  tex.texels = {glm::vec4(0.5f, 0.25f, 1.0f, 1.0f)};
+  tex.texels = {glm::vec4(0.5f, 0.25f, 1.0f, 0.5f)};
   scene.textures.push_back(tex);
   scenes::Material m;
   m.baseColorFactor = glm::vec4(0.8f, 0.8f, 0.4f, 1.0f);
@@ -528,9 +529,180 @@ TEST(BakerClusters, DiffuseAlbedoAndEmission) {
   const int textured = int(scene.materials.size()) - 1;
   const glm::vec3 base(0.4f, 0.2f, 0.4f);
   const glm::vec3 spec = glm::mix(glm::vec3(0.04f), base, 0.5f);
-  EXPECT_TRUE(near(diffuseAlbedo(scene, textured, uv), base * 0.5f + spec * 0.0625f * 0.5f));
+  EXPECT_TRUE(near(diffuseAlbedo(scene, textured, uv),
+                   base * 0.5f * 0.96f + spec * 0.0625f * 0.5f));
   EXPECT_TRUE(near(emittedRadiance(scene, textured, uv), glm::vec3(1.5f, 0.375f, 0.0f)));
   EXPECT_TRUE(near(emittedRadiance(scene, 0, uv), glm::vec3(0.0f)));
+  // The factor alone (the transport's material albedo) reads every texture as 1.
+  EXPECT_TRUE(near(diffuseAlbedoFactor(m), glm::vec3(0.8f, 0.8f, 0.4f) * 0.5f * 0.96f +
+                                               glm::mix(glm::vec3(0.04f),
+                                                        glm::vec3(0.8f, 0.8f, 0.4f), 0.5f) *
+                                                   0.5f));
+
+  // KHR_materials_specular textures: strength 0.8 × A 0.5, colour (2, 1, 1) × RGB (0.5, 0.25, 1).
+  scenes::Material s;
+  s.baseColorFactor = glm::vec4(0.6f, 0.6f, 0.6f, 1.0f);
+  s.metallicFactor = 0.0f;
+  s.roughnessFactor = 1.0f;
+  s.specularFactor = 0.8f;
+  s.specularTexture.texture = 0;
+  s.specularColorFactor = glm::vec3(2.0f, 1.0f, 1.0f);
+  s.specularColorTexture.texture = 0;
+  scene.materials.push_back(s);
+  const glm::vec3 f0 = glm::vec3(0.04f, 0.01f, 0.04f) * 0.4f;  // 0.04 × (1, 0.25, 1) × 0.4
+  EXPECT_TRUE(near(diffuseAlbedo(scene, int(scene.materials.size()) - 1, uv),
+                   glm::vec3(0.6f) * (1.0f - 0.016f) + f0 * 0.5f));
+}
+
+// The bounce albedo for a table of materials, each expected value worked out from the formula
+// (README, "Materials"): dielectricF0 = min(F0(ior) × specularColor, 1) × specular,
+// albedo = base (1 − metallic)(1 − max(dielectricF0)) + mix(dielectricF0, base, metallic) ×
+// roughness² / 2.
+TEST(BakerAlbedo, TableOfMaterials) {
+  struct Row {
+    const char* what;
+    glm::vec3 base;
+    float metallic, roughness, ior, specular;
+    glm::vec3 specularColor;
+    glm::vec3 expected;  // by hand
+  };
+  const glm::vec3 white(1.0f), grey(0.5f), red(0.9f, 0.2f, 0.1f);
+  // F0 for ior 1.5 is 0.04, for ior 2 (1/3)² = 1/9, for ior 1 0, for ior 0 1.
+  const double ninth = 1.0 / 9.0;
+  const Row rows[] = {
+      {"smooth dielectric", grey, 0, 0, 1.5f, 1, white, glm::vec3(0.5 * 0.96)},
+      {"rough dielectric", grey, 0, 1, 1.5f, 1, white, glm::vec3(0.5 * 0.96 + 0.04 * 0.5)},
+      {"half-rough white", white, 0, 0.5f, 1.5f, 1, white, glm::vec3(0.96 + 0.04 * 0.25 * 0.5)},
+      {"rough red", red, 0, 1, 1.5f, 1, white,
+       glm::vec3(0.9 * 0.96 + 0.02, 0.2 * 0.96 + 0.02, 0.1 * 0.96 + 0.02)},
+      {"smooth metal", red, 1, 0, 1.5f, 1, white, glm::vec3(0.0f)},
+      {"rough metal", red, 1, 1, 1.5f, 1, white, glm::vec3(0.45, 0.1, 0.05)},
+      {"rough metal, specular 0", red, 1, 1, 1.5f, 0, white, glm::vec3(0.45, 0.1, 0.05)},
+      {"specular 0", red, 0, 1, 1.5f, 0, white, red},
+      {"specular 0.5", grey, 0, 1, 1.5f, 0.5f, white, glm::vec3(0.5 * 0.98 + 0.02 * 0.5)},
+      {"ior 2", grey, 0, 1, 2.0f, 1, white, glm::vec3(0.5 * (1 - ninth) + ninth * 0.5)},
+      {"ior 1", grey, 0, 1, 1.0f, 1, white, grey},
+      {"ior 0 (F0 = 1)", grey, 0, 1, 0.0f, 1, white, glm::vec3(0.5)},
+      {"ior 0, smooth", grey, 0, 0, 0.0f, 1, white, glm::vec3(0.0f)},
+      {"ior 0, specular colour (0.5, 0.25, 0)", white, 0, 1, 0.0f, 1, {0.5f, 0.25f, 0.0f},
+       glm::vec3(0.5 + 0.25, 0.5 + 0.125, 0.5)},
+      {"specular colour 30 (F0 clamped to 1)", grey, 0, 1, 1.5f, 1, glm::vec3(30.0f),
+       glm::vec3(0.5)},
+      {"red specular colour", white, 0, 1, 1.5f, 1, {1, 0, 0},
+       glm::vec3(0.96 + 0.02, 0.96, 0.96)},
+      {"half metal, specular 0.5, ior 2", grey, 0.5f, 1, 2.0f, 0.5f, white,
+       glm::vec3(0.5 * 0.5 * (1 - ninth / 2) + (ninth / 2 * 0.5 + 0.5 * 0.5) * 0.5)},
+  };
+  for (const Row& r : rows) {
+    AlbedoInputs in;
+    in.baseColor = r.base;
+    in.metallic = r.metallic;
+    in.roughness = r.roughness;
+    in.ior = r.ior;
+    in.specular = r.specular;
+    in.specularColor = r.specularColor;
+    const glm::vec3 a = bounceAlbedo(in);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(a[k], r.expected[k], 1e-6f) << r.what << " channel " << k;
+      EXPECT_LE(a[k], 1.0f) << r.what;
+    }
+    // The same through a material and its factors.
+    Scene scene;
+    scenes::Material m;
+    m.baseColorFactor = glm::vec4(r.base, 1.0f);
+    m.metallicFactor = r.metallic;
+    m.roughnessFactor = r.roughness;
+    m.ior = r.ior;
+    m.specularFactor = r.specular;
+    m.specularColorFactor = r.specularColor;
+    scene.materials.push_back(m);
+    EXPECT_EQ(diffuseAlbedo(scene, 0, glm::vec2(0.5f)), a) << r.what;
+    EXPECT_EQ(diffuseAlbedoFactor(m), a) << r.what;
+  }
+}
+
+// specular 0 is a Lambertian surface: the base colour bit for bit (metallic 0), base ×
+// (1 − metallic) plus the metal's own share otherwise.
+TEST(BakerAlbedo, SpecularZeroIsLambertian) {
+  uint32_t state = 12345u;
+  auto unit = [&] {
+    state = state * 1664525u + 1013904223u;
+    return float(state >> 8) / float(1u << 24);
+  };
+  for (int i = 0; i < 10000; ++i) {
+    AlbedoInputs in;
+    in.baseColor = glm::vec3(unit(), unit(), unit());
+    in.metallic = 0.0f;
+    in.roughness = unit();
+    in.ior = i % 3 == 0 ? 0.0f : 1.0f + 3.0f * unit();
+    in.specular = 0.0f;
+    in.specularColor = glm::vec3(unit(), unit(), unit()) * 4.0f;
+    ASSERT_EQ(bounceAlbedo(in), in.baseColor) << i;
+    in.metallic = unit();
+    const float r2 = in.roughness * in.roughness;
+    const glm::vec3 a = bounceAlbedo(in);
+    for (int k = 0; k < 3; ++k)
+      ASSERT_NEAR(a[k], in.baseColor[k] * (1.0f - in.metallic) +
+                            in.baseColor[k] * in.metallic * r2 * 0.5f, 1e-6f) << i;
+  }
+}
+
+// The bounce albedo never exceeds 1 for a valid material: a grid over every input's range
+// (with the corners, where the bound is tightest) and a random sample, every channel.
+TEST(BakerAlbedo, NeverAboveOne) {
+  const float unitGrid[] = {0.0f, 0.01f, 0.25f, 0.5f, 0.9f, 0.99f, 1.0f};
+  const float iors[] = {0.0f, 1.0f, 1.001f, 1.33f, 1.5f, 2.4f, 10.0f, 1e6f};
+  const float colourGrid[] = {0.0f, 0.5f, 1.0f, 4.0f, 25.0f, 1e6f};
+  float worst = 0.0f;
+  size_t checked = 0;
+  auto check = [&](const AlbedoInputs& in) {
+    const glm::vec3 a = bounceAlbedo(in);
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_TRUE(std::isfinite(a[k]));
+      ASSERT_GE(a[k], 0.0f);
+      ASSERT_LE(a[k], 1.0f) << "base " << in.baseColor[k] << " metallic " << in.metallic
+                            << " roughness " << in.roughness << " ior " << in.ior
+                            << " specular " << in.specular << " colour " << in.specularColor[k];
+      worst = std::max(worst, a[k]);
+    }
+    ++checked;
+  };
+  for (float b : unitGrid)
+    for (float metallic : unitGrid)
+      for (float roughness : unitGrid)
+        for (float ior : iors)
+          for (float specular : unitGrid)
+            for (float c0 : colourGrid)
+              for (float c1 : {0.0f, 1.0f, 25.0f}) {
+                AlbedoInputs in;
+                in.baseColor = glm::vec3(b, 1.0f, 0.0f);
+                in.metallic = metallic;
+                in.roughness = roughness;
+                in.ior = ior;
+                in.specular = specular;
+                in.specularColor = glm::vec3(c0, c1, c0);
+                check(in);
+                if (::testing::Test::HasFatalFailure()) return;
+              }
+  uint32_t state = 777u;
+  auto unit = [&] {
+    state = state * 1664525u + 1013904223u;
+    return float(state >> 8) / float((1u << 24) - 1u);
+  };
+  for (int i = 0; i < 200000; ++i) {
+    AlbedoInputs in;
+    in.baseColor = glm::vec3(unit(), unit(), unit());
+    in.metallic = unit();
+    in.roughness = unit();
+    in.ior = i % 10 == 0 ? 0.0f : 1.0f + 4.0f * unit() * unit();
+    in.specular = unit();
+    in.specularColor = glm::vec3(unit(), unit(), unit()) * (i % 2 ? 1.0f : 30.0f);
+    check(in);
+    if (::testing::Test::HasFatalFailure()) return;
+  }
+  // The bound is reached, never passed: white with specular 0 is exactly 1.
+  EXPECT_EQ(worst, 1.0f);
+  std::printf("bounce albedo <= 1 over %zu materials\n", checked);
 }
 
 TEST(BakerTexels, DeterministicAcrossThreadCounts) {

@@ -28,7 +28,7 @@ scenes::Material material(const std::string& name, glm::vec3 albedo, glm::vec3 e
   m.name = name;
   m.baseColorFactor = glm::vec4(albedo, 1.0f);
   m.metallicFactor = 0.0f;
-  m.roughnessFactor = 0.0f;  // no meta-pass specular share: the diffuse albedo is exactly albedo
+  m.specularFactor = 0.0f;  // KHR_materials_specular 0: Lambertian, the albedo is exactly albedo
   m.emissiveFactor = emission;
   return m;
 }
@@ -457,7 +457,7 @@ void buildFurnaceBox(FurnaceBox& box) {
   fo.albedo = glm::vec3(0.5f);
   fo.emission = glm::vec3(1.0f);
   box.scene = scenes::makeFurnaceBox(fo);
-  box.scene.materials[0].roughnessFactor = 0.0f;  // no specular share: ρ is exactly 0.5
+  box.scene.materials[0].specularFactor = 0.0f;  // Lambertian: ρ is exactly 0.5
   uv::UnwrapOptions uopt;
   uopt.pack.texelsPerUnit = 16.0f;
   ASSERT_TRUE(uv::unwrap(box.scene, uopt).isOk());

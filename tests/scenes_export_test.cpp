@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
 #include "afterglow/core/atomic_file.h"
@@ -150,6 +151,11 @@ void expectSameMaterials(const Scene& a, const Scene& b) {
     EXPECT_EQ(x.roughnessFactor, y.roughnessFactor) << x.name;
     EXPECT_EQ(x.emissiveFactor, y.emissiveFactor) << x.name;
     EXPECT_EQ(x.emissiveStrength, y.emissiveStrength) << x.name;
+    EXPECT_EQ(x.ior, y.ior) << x.name;
+    EXPECT_EQ(x.specularFactor, y.specularFactor) << x.name;
+    EXPECT_EQ(x.specularColorFactor, y.specularColorFactor) << x.name;
+    EXPECT_EQ(x.specularTexture.valid(), y.specularTexture.valid()) << x.name;
+    EXPECT_EQ(x.specularColorTexture.valid(), y.specularColorTexture.valid()) << x.name;
     EXPECT_EQ(x.doubleSided, y.doubleSided) << x.name;
     EXPECT_EQ(x.alphaMode, y.alphaMode) << x.name;
     if (x.alphaMode == AlphaMode::Mask) {
@@ -385,6 +391,87 @@ TEST(GltfExport, TextureUrisAreRelativeToTheOutput) {
   EXPECT_FALSE(doc["materials"][1]["pbrMetallicRoughness"].contains("baseColorTexture"));
   EXPECT_EQ(doc["materials"][2]["emissiveTexture"], (json{{"index", 1}, {"texCoord", 1}}));
   EXPECT_EQ(doc["extensionsRequired"], json::array({"KHR_texture_transform"}));
+}
+
+// KHR_materials_specular and KHR_materials_ior survive load -> save -> load, factors and
+// textures (with their transforms and colour spaces), and are listed in extensionsUsed only.
+TEST(GltfExport, SpecularAndIorRoundTrip) {
+  const std::string dir = test::tempDir("export_specular");
+  fs::create_directories(dir + "/in");
+  {
+    // A 1×1 RGBA PNG: the strength in A, the colour in RGB (OpenImageIO takes associated alpha:
+    // 204, 128, 0 at alpha 0.8 read back as 1, 0.50196, 0).
+    auto out = OIIO::ImageOutput::create(dir + "/in/spec.png");
+    ASSERT_TRUE(out);
+    OIIO::ImageSpec spec(1, 1, 4, OIIO::TypeDesc::UINT8);
+    ASSERT_TRUE(out->open(dir + "/in/spec.png", spec));
+    const uint8_t px[4] = {204, 128, 0, 204};
+    ASSERT_TRUE(out->write_image(OIIO::TypeDesc::UINT8, px));
+    out->close();
+  }
+  Scene source = makeFurnaceBox();
+  source.materials.push_back(source.materials[0]);
+  source.materials[1].name = "plain";
+  ASSERT_TRUE(saveGltf(source, dir + "/in/level.gltf").isOk());
+  json doc = readJson(dir + "/in/level.gltf");
+  doc["images"] = json::array({{{"uri", "spec.png"}}});
+  doc["textures"] = json::array({{{"source", 0}}});
+  doc["materials"][0]["extensions"]["KHR_materials_ior"] = {{"ior", 1.45}};
+  doc["materials"][0]["extensions"]["KHR_materials_specular"] = {
+      {"specularFactor", 0.5},
+      {"specularTexture", {{"index", 0}}},
+      {"specularColorFactor", {1.5, 1.0, 0.25}},
+      {"specularColorTexture",
+       {{"index", 0}, {"extensions", {{"KHR_texture_transform", {{"scale", {2, 2}}}}}}}}};
+  doc["extensionsUsed"] = {"KHR_materials_ior", "KHR_materials_specular", "KHR_texture_transform"};
+  {
+    std::ofstream out(dir + "/in/level.gltf", std::ios::binary | std::ios::trunc);
+    out << doc.dump(1);
+  }
+  Result<Scene> a = loadGltf(dir + "/in/level.gltf");
+  ASSERT_TRUE(a) << a.message();
+  for (const std::string& w : a->warnings) ADD_FAILURE() << w;
+  const Material& m = a->materials[0];
+  EXPECT_FLOAT_EQ(m.ior, 1.45f);
+  EXPECT_FLOAT_EQ(m.specularFactor, 0.5f);
+  EXPECT_EQ(m.specularColorFactor, glm::vec3(1.5f, 1.0f, 0.25f));
+  ASSERT_TRUE(m.specularTexture.valid());
+  ASSERT_TRUE(m.specularColorTexture.valid());
+  EXPECT_NEAR(a->textures[size_t(m.specularTexture.texture)].texels[0].a, 0.8f, 1e-6f);
+  EXPECT_NEAR(a->textures[size_t(m.specularColorTexture.texture)].texels[0].g, 0.21586f, 2e-4f);
+
+  ASSERT_TRUE(saveGltf(*a, dir + "/out/level.gltf").isOk());
+  const json written = readJson(dir + "/out/level.gltf");
+  const std::set<std::string> used = written["extensionsUsed"].get<std::set<std::string>>();
+  EXPECT_TRUE(used.count("KHR_materials_ior"));
+  EXPECT_TRUE(used.count("KHR_materials_specular"));
+  // Only the texture transform is required (a scale of 2 moves the texture).
+  EXPECT_EQ(written["extensionsRequired"], json::array({"KHR_texture_transform"}));
+  const json& ext = written["materials"][0]["extensions"];
+  EXPECT_EQ(ext["KHR_materials_ior"]["ior"], 1.45);
+  EXPECT_EQ(ext["KHR_materials_specular"]["specularFactor"], 0.5);
+  EXPECT_EQ(ext["KHR_materials_specular"]["specularColorFactor"], json::array({1.5, 1.0, 0.25}));
+  EXPECT_TRUE(ext["KHR_materials_specular"].contains("specularTexture"));
+  EXPECT_EQ(ext["KHR_materials_specular"]["specularColorTexture"]["extensions"]
+               ["KHR_texture_transform"]["scale"],
+            json::array({2.0, 2.0}));
+  // Defaults are not written.
+  EXPECT_FALSE(written["materials"][1].contains("extensions"));
+
+  Result<Scene> b = loadGltf(dir + "/out/level.gltf");
+  ASSERT_TRUE(b) << b.message();
+  for (const std::string& w : b->warnings) ADD_FAILURE() << w;
+  expectSameMaterials(*a, *b);
+  const Material& n = b->materials[0];
+  EXPECT_EQ(n.specularColorTexture.scale, glm::vec2(2.0f));
+  const Texture& strength = b->textures[size_t(n.specularTexture.texture)];
+  const Texture& colour = b->textures[size_t(n.specularColorTexture.texture)];
+  EXPECT_FALSE(strength.srgb);
+  EXPECT_TRUE(colour.srgb);
+  EXPECT_NEAR(strength.texels[0].a, 0.8f, 1e-6f);
+  EXPECT_NEAR(colour.texels[0].g, 0.21586f, 2e-4f);
+  EXPECT_EQ(b->materials[1].ior, 1.5f);
+  EXPECT_EQ(b->materials[1].specularFactor, 1.0f);
 }
 
 TEST(GltfExport, SponzaRoundTrip) {

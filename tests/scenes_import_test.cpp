@@ -416,6 +416,115 @@ TEST(GltfImport, TexturesDecodeSrgbPerUseAndHonourTransforms) {
   EXPECT_FALSE(hasWarning(*r2, "decoded"));
 }
 
+// KHR_materials_specular and KHR_materials_ior: factors, textures (specular strength from the
+// alpha channel of a linear texture, specular colour from an sRGB one), no "used but ignored".
+TEST(GltfImport, SpecularAndIorFactorsAndTextures) {
+  const std::string dir = test::tempDir("gltf_import_specular");
+  writeGreyPng(dir + "/spec.png");
+  Builder b;
+  int pos = b.positions(kTriangle);
+  b.mesh(json::array({{{"attributes", {{"POSITION", pos}}}, {"material", 0}}}));
+  b.node({{"mesh", 0}});
+  b.scene({0});
+  b.j["extensionsUsed"] = {"KHR_materials_specular", "KHR_materials_ior", "KHR_texture_transform"};
+  b.j["images"] = json::array({{{"uri", "spec.png"}}});
+  b.j["textures"] = json::array({{{"source", 0}}});
+  b.j["materials"] = json::array(
+      {{{"name", "Glossy"},
+        {"extensions",
+         {{"KHR_materials_ior", {{"ior", 1.33}}},
+          {"KHR_materials_specular",
+           {{"specularFactor", 0.75},
+            {"specularTexture", {{"index", 0}, {"texCoord", 1}}},
+            {"specularColorFactor", {2.0, 1.0, 0.5}},
+            {"specularColorTexture",
+             {{"index", 0},
+              {"extensions", {{"KHR_texture_transform", {{"offset", {0.5, 0}}}}}}}}}}}}},
+       {{"name", "Plain"}},
+       {{"name", "SpecGloss"}, {"extensions", {{"KHR_materials_ior", {{"ior", 0}}}}}}});
+  auto r = loadGltfFromMemory(b.gltf(), "spec.gltf", dir);
+  ASSERT_TRUE(r) << r.message();
+  // The triangle's missing normals are the only thing to warn about.
+  for (const std::string& w : r->warnings)
+    if (w.find("no NORMAL attribute") == std::string::npos) ADD_FAILURE() << w;
+  ASSERT_EQ(r->materials.size(), 3u);
+  const Material& m = r->materials[0];
+  EXPECT_FLOAT_EQ(m.ior, 1.33f);
+  EXPECT_FLOAT_EQ(m.specularFactor, 0.75f);
+  EXPECT_EQ(m.specularColorFactor, glm::vec3(2.0f, 1.0f, 0.5f));
+  ASSERT_TRUE(m.specularTexture.valid());
+  ASSERT_TRUE(m.specularColorTexture.valid());
+  EXPECT_EQ(m.specularTexture.texCoord, 1);
+  EXPECT_FALSE(m.specularTexture.hasTransform);
+  EXPECT_TRUE(m.specularColorTexture.hasTransform);
+  EXPECT_EQ(m.specularColorTexture.offset, glm::vec2(0.5f, 0.0f));
+  // One image, decoded linear for the strength and sRGB for the colour.
+  ASSERT_NE(m.specularTexture.texture, m.specularColorTexture.texture);
+  const Texture& strength = r->textures[size_t(m.specularTexture.texture)];
+  const Texture& colour = r->textures[size_t(m.specularColorTexture.texture)];
+  ASSERT_TRUE(strength.loaded());
+  ASSERT_TRUE(colour.loaded());
+  EXPECT_FALSE(strength.srgb);
+  EXPECT_TRUE(colour.srgb);
+  EXPECT_NEAR(strength.texels[0].r, 0.5f, 1e-4f);
+  EXPECT_NEAR(strength.texels[0].a, 0.5f, 1e-4f);
+  EXPECT_NEAR(colour.texels[0].r, 0.2140f, 1e-4f);
+  // Without the extensions: glTF's defaults.
+  const Material& plain = r->materials[1];
+  EXPECT_EQ(plain.ior, 1.5f);
+  EXPECT_EQ(plain.specularFactor, 1.0f);
+  EXPECT_EQ(plain.specularColorFactor, glm::vec3(1.0f));
+  EXPECT_FALSE(plain.specularTexture.valid());
+  EXPECT_FALSE(plain.specularColorTexture.valid());
+  // ior 0 is valid (the specular-glossiness conversion: F0 = 1).
+  EXPECT_EQ(r->materials[2].ior, 0.0f);
+}
+
+// Out-of-range values are clamped into range, each with a warning naming the file and material.
+TEST(GltfImport, SpecularAndIorOutOfRangeWarn) {
+  Builder b;
+  int pos = b.positions(kTriangle);
+  b.mesh(json::array({{{"attributes", {{"POSITION", pos}}}, {"material", 0}}}));
+  b.node({{"mesh", 0}});
+  b.scene({0});
+  b.j["extensionsUsed"] = {"KHR_materials_specular", "KHR_materials_ior"};
+  b.j["materials"] = json::array(
+      {{{"name", "TooMuch"},
+        {"extensions",
+         {{"KHR_materials_ior", {{"ior", 0.5}}},
+          {"KHR_materials_specular",
+           {{"specularFactor", 1.5}, {"specularColorFactor", {-1.0, 0.5, 3.0}}}}}}},
+       {{"name", "Negative"},
+        {"extensions",
+         {{"KHR_materials_ior", {{"ior", -2}}},
+          {"KHR_materials_specular", {{"specularFactor", -0.5}, {"specularColorFactor", "red"}}}}}},
+       {{"name", "BadTexture"},
+        {"extensions", {{"KHR_materials_specular", {{"specularTexture", {{"texCoord", 0}}}}}}}}});
+  auto r = load(b.gltf());
+  ASSERT_TRUE(r) << r.message();
+  ASSERT_EQ(r->materials.size(), 3u);
+  const Material& a = r->materials[0];
+  EXPECT_EQ(a.ior, 1.0f);
+  EXPECT_EQ(a.specularFactor, 1.0f);
+  EXPECT_EQ(a.specularColorFactor, glm::vec3(0.0f, 0.5f, 3.0f));  // above 1 is valid
+  EXPECT_TRUE(hasWarning(*r, "test.gltf: material 'TooMuch'", "ior 0.5 is below 1"));
+  EXPECT_TRUE(hasWarning(*r, "test.gltf: material 'TooMuch'", "specularFactor 1.5 is outside [0, 1]"));
+  EXPECT_TRUE(hasWarning(*r, "test.gltf: material 'TooMuch'", "specularColorFactor has negative"));
+  const Material& n = r->materials[1];
+  EXPECT_EQ(n.ior, 1.5f);
+  EXPECT_EQ(n.specularFactor, 0.0f);
+  EXPECT_EQ(n.specularColorFactor, glm::vec3(1.0f));
+  EXPECT_TRUE(hasWarning(*r, "test.gltf: material 'Negative'", "ior is not a number >= 1 or 0"));
+  EXPECT_TRUE(hasWarning(*r, "test.gltf: material 'Negative'", "specularFactor -0.5 is outside"));
+  EXPECT_TRUE(hasWarning(*r, "test.gltf: material 'Negative'", "specularColorFactor is not 3"));
+  EXPECT_FALSE(r->materials[2].specularTexture.valid());
+  EXPECT_TRUE(hasWarning(*r, "test.gltf: material 'BadTexture'", "specularTexture has no valid index"));
+  EXPECT_FALSE(hasWarning(*r, "used but ignored"));
+  size_t materialWarnings = 0;
+  for (const std::string& w : r->warnings) materialWarnings += w.find("material '") != std::string::npos;
+  EXPECT_EQ(materialWarnings, 7u);
+}
+
 TEST(GltfImport, EmbeddedEightBitImagesUseTheExactSrgbCurve) {
   // A 1×1 8-bit grey PNG of code value 128, embedded once through a bufferView and once as a
   // data: URI. sRGB 128/255 = 0.50196 decodes to 0.21586 linear.

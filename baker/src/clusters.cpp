@@ -28,20 +28,81 @@ glm::vec3 textureRgb(const scenes::Scene& scene, const scenes::TextureRef& ref, 
   return glm::vec3(texture.sample(ref.transform(uv0)));
 }
 
+float textureAlpha(const scenes::Scene& scene, const scenes::TextureRef& ref, glm::vec2 uv0) {
+  if (!ref.valid() || size_t(ref.texture) >= scene.textures.size()) return 1.0f;
+  const scenes::Texture& texture = scene.textures[size_t(ref.texture)];
+  if (!texture.loaded()) return 1.0f;
+  return texture.sample(ref.transform(uv0)).a;
+}
+
 
 }  // namespace
 
+glm::vec3 dielectricF0(float ior, float specular, glm::vec3 specularColor) {
+  // KHR_materials_ior allows ior >= 1 or exactly 0; the formula gives F0 = 1 at 0 (and in the
+  // limit ior -> inf), which is what the extension means by 0. Anything negative or NaN, which
+  // the importer never lets through, reads as glTF's default 1.5.
+  float f0 = 0.04f;
+  if (std::isinf(ior)) {
+    f0 = 1.0f;
+  } else if (ior >= 0.0f) {
+    const float r = (ior - 1.0f) / (ior + 1.0f);
+    f0 = r * r;
+  }
+  const glm::vec3 color = glm::max(specularColor, glm::vec3(0.0f));
+  return glm::min(f0 * color, glm::vec3(1.0f)) * glm::clamp(specular, 0.0f, 1.0f);
+}
+
+// Unity's meta pass (UnityLightmappingAlbedo in UnityMetaPass.cginc) reflects
+//   diffuseColor + specColor × roughness × 0.5,
+// diffuseColor = baseColor × oneMinusReflectivity (OneMinusReflectivityFromMetallic: the
+// dielectric reflectance, 0.04 there, comes out first), roughness = SmoothnessToRoughness, the
+// square of the perceptual roughness glTF stores. glTF's dielectric reflectance comes from
+// KHR_materials_ior and KHR_materials_specular, and KHR_materials_specular weights the diffuse
+// base by 1 − max_value(dielectric Fresnel); at normal incidence that is 1 − max(dielectricF0).
+//
+// Never above 1. Per channel, with b = baseColor, m = metallic, r = roughness², d = this
+// channel of dielectricF0 and D = max(dielectricF0.rgb), all in [0, 1] for a valid material
+// (factors and textures in [0, 1]; F0(ior) × specularColor is clamped to 1 before the
+// specular weight in [0, 1] multiplies it), and d <= D:
+//   albedo = b(1 − m)(1 − D) + ((1 − m)d + m b) r / 2
+//         <= b(1 − m)(1 − D) + (1 − m)D / 2 + m b / 2      (r <= 1, d <= D)
+//         <=  (1 − m)(1 − D) + (1 − m)D / 2 + m / 2        (b <= 1)
+//          =  (1 − m)(1 − D / 2) + m / 2  <=  1 − m / 2  <=  1,
+// with 1 reached only by a white Lambertian surface (b = 1, m = 0, D = 0: specular 0).
+glm::vec3 bounceAlbedo(const AlbedoInputs& in) {
+  const float metallic = glm::clamp(in.metallic, 0.0f, 1.0f);
+  const float perceptual = glm::clamp(in.roughness, 0.0f, 1.0f);
+  const float roughness = perceptual * perceptual;
+  const glm::vec3 f0 = dielectricF0(in.ior, in.specular, in.specularColor);
+  const float reflectivity = std::max(f0.x, std::max(f0.y, f0.z));
+  const glm::vec3 diffuse = in.baseColor * (1.0f - metallic) * (1.0f - reflectivity);
+  const glm::vec3 specColor = f0 * (1.0f - metallic) + in.baseColor * metallic;
+  return diffuse + specColor * roughness * 0.5f;
+}
+
 glm::vec3 diffuseAlbedo(const scenes::Scene& scene, int material, glm::vec2 uv0) {
   const scenes::Material& m = scene.material(material);
-  const glm::vec3 base = glm::vec3(m.baseColorFactor) * textureRgb(scene, m.baseColorTexture, uv0);
   const glm::vec3 mr = textureRgb(scene, m.metallicRoughnessTexture, uv0);
-  const float metallic = glm::clamp(m.metallicFactor * mr.b, 0.0f, 1.0f);
-  const float perceptualRoughness = glm::clamp(m.roughnessFactor * mr.g, 0.0f, 1.0f);
-  // Unity's meta pass (UnityLightmappingAlbedo): roughness there is SmoothnessToRoughness, the
-  // square of the perceptual roughness glTF stores.
-  const float roughness = perceptualRoughness * perceptualRoughness;
-  const glm::vec3 specColor = glm::mix(glm::vec3(0.04f), base, metallic);
-  return base * (1.0f - metallic) + specColor * roughness * 0.5f;
+  AlbedoInputs in;
+  in.baseColor = glm::vec3(m.baseColorFactor) * textureRgb(scene, m.baseColorTexture, uv0);
+  in.metallic = m.metallicFactor * mr.b;
+  in.roughness = m.roughnessFactor * mr.g;
+  in.ior = m.ior;
+  in.specular = m.specularFactor * textureAlpha(scene, m.specularTexture, uv0);
+  in.specularColor = m.specularColorFactor * textureRgb(scene, m.specularColorTexture, uv0);
+  return bounceAlbedo(in);
+}
+
+glm::vec3 diffuseAlbedoFactor(const scenes::Material& m) {
+  AlbedoInputs in;
+  in.baseColor = glm::vec3(m.baseColorFactor);
+  in.metallic = m.metallicFactor;
+  in.roughness = m.roughnessFactor;
+  in.ior = m.ior;
+  in.specular = m.specularFactor;
+  in.specularColor = m.specularColorFactor;
+  return bounceAlbedo(in);
 }
 
 glm::vec3 emittedRadiance(const scenes::Scene& scene, int material, glm::vec2 uv0) {

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "afterglow/baker/clusters.h"
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/parallel.h"
@@ -149,17 +150,11 @@ void buildRows(size_t rows, uint32_t targets, Progress& progress, MakeState&& ma
   }
 }
 
-// The material's diffuse albedo factor without textures (DESIGN.md: baseColor × (1 − metallic)
-// plus Unity's meta-pass specular share specColor × roughness × 0.5, specColor = lerp(0.04,
-// baseColor, metallic), roughness = perceptual roughness², as baker::diffuseAlbedo does).
-glm::vec3 albedoFactor(const scenes::Material& m) {
-  const glm::vec3 base(m.baseColorFactor);
-  const float metallic = std::clamp(m.metallicFactor, 0.0f, 1.0f);
-  const float perceptual = std::clamp(m.roughnessFactor, 0.0f, 1.0f);
-  const float roughness = perceptual * perceptual;
-  const glm::vec3 spec = glm::mix(glm::vec3(0.04f), base, metallic);
-  return base * (1.0f - metallic) + spec * roughness * 0.5f;
-}
+// The material's albedo with every texture read as 1 (baker::diffuseAlbedoFactor, the same
+// formula as baker::diffuseAlbedo). A cluster's albedo is this factor × its texture ratio
+// (its mean textured albedo / this factor), so setAlbedo on a material scales its textured
+// clusters by the same ratios.
+glm::vec3 albedoFactor(const scenes::Material& m) { return diffuseAlbedoFactor(m); }
 
 glm::vec3 safeRatio(glm::vec3 value, glm::vec3 factor) {
   glm::vec3 r(1.0f);

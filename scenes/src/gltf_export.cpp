@@ -329,6 +329,22 @@ struct Exporter {
             {"emissiveStrength", num(mat.emissiveStrength)}};
         extensionsUsed.insert("KHR_materials_emissive_strength");
       }
+      if (mat.ior != 1.5f) {
+        jm["extensions"]["KHR_materials_ior"] = {{"ior", num(mat.ior)}};
+        extensionsUsed.insert("KHR_materials_ior");
+      }
+      json specular = json::object();
+      if (mat.specularFactor != 1.0f) specular["specularFactor"] = num(mat.specularFactor);
+      if (json t = textureInfo(mat.specularTexture); !t.is_null())
+        specular["specularTexture"] = std::move(t);
+      if (mat.specularColorFactor != glm::vec3(1.0f))
+        specular["specularColorFactor"] = vec(mat.specularColorFactor);
+      if (json t = textureInfo(mat.specularColorTexture); !t.is_null())
+        specular["specularColorTexture"] = std::move(t);
+      if (!specular.empty()) {
+        jm["extensions"]["KHR_materials_specular"] = std::move(specular);
+        extensionsUsed.insert("KHR_materials_specular");
+      }
       if (mat.alphaMode == AlphaMode::Mask) {
         jm["alphaMode"] = "MASK";
         jm["alphaCutoff"] = num(mat.alphaCutoff);
@@ -519,9 +535,9 @@ Status saveGltf(const Scene& scene, const std::string& path, const SaveOptions& 
   if (!ex.extensionsUsed.empty())
     ex.doc["extensionsUsed"] = std::vector<std::string>(ex.extensionsUsed.begin(),
                                                         ex.extensionsUsed.end());
-  // Lights and emissive strength degrade gracefully in a viewer that lacks them; a texture
-  // transform that is not the identity does not (the textures would land in the wrong place),
-  // so only that one is required, as the source files that use it do.
+  // Lights, emissive strength, ior and specular degrade gracefully in a viewer that lacks them;
+  // a texture transform that is not the identity does not (the textures would land in the wrong
+  // place), so only that one is required, as the source files that use it do.
   if (ex.transformRequired) ex.doc["extensionsRequired"] = {"KHR_texture_transform"};
 
   const std::string text = glb ? ex.doc.dump() : ex.doc.dump(1);

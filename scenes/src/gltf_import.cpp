@@ -50,7 +50,7 @@ constexpr size_t kMaxWarnings = 500;  // a broken file must not produce millions
 const std::set<std::string>& supportedExtensions() {
   static const std::set<std::string> kSupported = {
       "KHR_lights_punctual", "KHR_texture_transform", "KHR_materials_emissive_strength",
-      "KHR_mesh_quantization"};
+      "KHR_materials_ior", "KHR_materials_specular", "KHR_mesh_quantization"};
   return kSupported;
 }
 
@@ -959,9 +959,94 @@ class Importer {
                          src.occlusionTexture.extensions, where + " occlusionTexture", false, false,
                          m.occlusionTexture);
       if (!s) return s;
+      s = importSpecular(src, where, m);
+      if (!s) return s;
       scene_.materials.push_back(std::move(m));
     }
     return Status::ok();
+  }
+
+  // A textureInfo inside an extension (a JSON object rather than tinygltf's TextureInfo).
+  Status extensionTexture(const tinygltf::Value& ext, const char* key, const std::string& where,
+                          bool srgb, TextureRef& ref) {
+    const tinygltf::Value* info = member(ext, key);
+    if (!info) return Status::ok();
+    const tinygltf::Value* index = member(*info, "index");
+    if (!index || !index->IsInt() || index->GetNumberAsInt() < 0) {
+      warn(where + " " + key + " has no valid index, ignored");
+      return Status::ok();
+    }
+    double texCoord = 0.0;
+    if (const tinygltf::Value* tc = member(*info, "texCoord")) {
+      if (tc->IsInt() && tc->GetNumberAsInt() >= 0) texCoord = tc->GetNumberAsInt();
+      else warn(where + " " + key + ": texCoord is not a non-negative integer, 0 used");
+    }
+    tinygltf::ExtensionMap extensions;
+    if (const tinygltf::Value* e = member(*info, "extensions"))
+      for (const std::string& name : e->Keys()) extensions[name] = e->Get(name);
+    return textureRef(index->GetNumberAsInt(), texCoord, extensions, where + " " + key, srgb, true,
+                      ref);
+  }
+
+  // KHR_materials_ior and KHR_materials_specular: the dielectric reflectance the bounce albedo
+  // takes out of the diffuse part. Out-of-range values are clamped into range with a warning.
+  Status importSpecular(const tinygltf::Material& src, const std::string& where, Material& m) {
+    auto ior = src.extensions.find("KHR_materials_ior");
+    if (ior != src.extensions.end()) {
+      if (const tinygltf::Value* v = member(ior->second, "ior")) {
+        const double x = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
+        if (std::isfinite(x) && (x >= 1.0 || x == 0.0)) {
+          m.ior = narrow(x);
+        } else if (std::isfinite(x) && x > 0.0) {
+          m.ior = 1.0f;
+          warn(format("%s: KHR_materials_ior ior %g is below 1 (and not 0), 1 used", where.c_str(), x));
+        } else {
+          warn(where + ": KHR_materials_ior ior is not a number >= 1 or 0, 1.5 used");
+        }
+      }
+    }
+    auto spec = src.extensions.find("KHR_materials_specular");
+    if (spec == src.extensions.end()) return Status::ok();
+    const tinygltf::Value& ext = spec->second;
+    if (!ext.IsObject()) {
+      warn(where + ": KHR_materials_specular is not an object, ignored");
+      return Status::ok();
+    }
+    if (const tinygltf::Value* v = member(ext, "specularFactor")) {
+      const double x = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
+      if (!std::isfinite(x)) {
+        warn(where + ": KHR_materials_specular specularFactor is not a number, 1 used");
+      } else {
+        m.specularFactor = narrow(std::clamp(x, 0.0, 1.0));
+        if (x < 0.0 || x > 1.0)
+          warn(format("%s: KHR_materials_specular specularFactor %g is outside [0, 1], %g used",
+                      where.c_str(), x, double(m.specularFactor)));
+      }
+    }
+    if (const tinygltf::Value* v = member(ext, "specularColorFactor")) {
+      bool numbers = v->IsArray() && v->ArrayLen() == 3;
+      for (int k = 0; numbers && k < 3; ++k)
+        numbers = v->Get(k).IsNumber() && std::isfinite(v->Get(k).GetNumberAsDouble());
+      if (!numbers) {
+        warn(where + ": KHR_materials_specular specularColorFactor is not 3 finite numbers, "
+                     "white used");
+      } else {
+        bool negative = false;
+        for (int k = 0; k < 3; ++k) {
+          const double x = v->Get(k).GetNumberAsDouble();
+          negative = negative || x < 0.0;
+          m.specularColorFactor[k] = narrow(std::max(x, 0.0));
+        }
+        if (negative)
+          warn(where + ": KHR_materials_specular specularColorFactor has negative components, "
+                       "0 used for them");
+      }
+    }
+    Status s = extensionTexture(ext, "specularTexture", where + " KHR_materials_specular", false,
+                                m.specularTexture);
+    if (!s) return s;
+    return extensionTexture(ext, "specularColorTexture", where + " KHR_materials_specular", true,
+                            m.specularColorTexture);
   }
 
   void decodeTextures() {

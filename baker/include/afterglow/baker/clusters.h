@@ -76,9 +76,32 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
                          const TexelSet& texels, const TexelGather* gather = nullptr,
                          const ClusterOptions& options = {});
 
-// The diffuse albedo the baker uses for a material at a UV (DESIGN.md: baseColor × (1 − metallic)
-// plus Unity's meta-pass specular share), linear RGB.
+// The bounce albedo of one point of a material, from its inputs with textures applied (Unity's
+// meta pass, UnityLightmappingAlbedo, with glTF's dielectric reflectance):
+//   dielectricF0 = min(F0(ior) × specularColor, 1) × specular,  F0(ior) = ((ior − 1)/(ior + 1))²
+//   specColor    = mix(dielectricF0, baseColor, metallic)
+//   albedo       = baseColor × (1 − metallic) × (1 − max(dielectricF0.rgb))
+//                + specColor × roughness² × 0.5
+// roughness is glTF's perceptual roughness. The result never exceeds 1 for valid inputs (proof
+// at the definition). Linear RGB.
+struct AlbedoInputs {
+  glm::vec3 baseColor{1.0f};          // baseColorFactor × baseColorTexture
+  float metallic = 1.0f;              // metallicFactor × metallicRoughnessTexture.b
+  float roughness = 1.0f;             // roughnessFactor × metallicRoughnessTexture.g (perceptual)
+  float ior = 1.5f;                   // KHR_materials_ior (0 = F0 of 1, as the extension says)
+  float specular = 1.0f;              // KHR_materials_specular: factor × specularTexture.a
+  glm::vec3 specularColor{1.0f};      //   specularColorFactor × specularColorTexture.rgb
+};
+glm::vec3 bounceAlbedo(const AlbedoInputs& in);
+// glTF's dielectric F0 colour: min(F0(ior) × specularColor, 1) × specular.
+glm::vec3 dielectricF0(float ior, float specular, glm::vec3 specularColor);
+
+// The diffuse albedo the baker uses for a material at a UV: bounceAlbedo of its factors and
+// textures, linear RGB.
 glm::vec3 diffuseAlbedo(const scenes::Scene& scene, int material, glm::vec2 uv0);
+// bounceAlbedo of a material's factors alone (every texture read as 1): the transport's
+// material albedo, which the per-cluster texture ratios multiply.
+glm::vec3 diffuseAlbedoFactor(const scenes::Material& material);
 // Emitted radiance of a material at a UV, linear RGB.
 glm::vec3 emittedRadiance(const scenes::Scene& scene, int material, glm::vec2 uv0);
 

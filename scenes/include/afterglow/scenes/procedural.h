@@ -18,12 +18,13 @@ Scene makeCornellBox();
 
 struct FurnaceOptions {
   float size = 1.0f;                  // edge length of the cube, metres
-  glm::vec3 albedo{0.5f};             // every surface's diffuse albedo
+  glm::vec3 albedo{0.5f};             // every surface's base colour (metallic 0, roughness 1)
   glm::vec3 emission{1.0f};           // every surface's emitted radiance
   int subdivisions = 4;               // quads per edge on each face
 };
 // A closed cube seen from inside: every surface has the same albedo and emission, so the
-// radiance everywhere is Le / (1 - albedo).
+// radiance everywhere is Le / (1 - albedo), albedo being the bounce albedo of the material
+// (baker::diffuseAlbedo: 0.96 × the base colour + 0.02 for this rough dielectric).
 Scene makeFurnaceBox(const FurnaceOptions& options = {});
 
 }  // namespace afterglow::scenes

@@ -27,8 +27,9 @@ struct TextureRef {
   glm::vec2 transform(glm::vec2 uv) const;
 };
 
-// A decoded texture. Colour textures (base colour, emissive) are decoded from sRGB to linear on
-// load; data textures (metallic-roughness, normal) are kept linear as stored.
+// A decoded texture. Colour textures (base colour, emissive, specular colour) are decoded from
+// sRGB to linear on load; data textures (metallic-roughness, specular, normal) are kept linear
+// as stored.
 struct Texture {
   std::string name;
   std::string uri;       // as written in the glTF (file name or "" when embedded)
@@ -51,6 +52,16 @@ struct Material {
   float metallicFactor = 1.0f;
   float roughnessFactor = 1.0f;
   TextureRef metallicRoughnessTexture;  // G = roughness, B = metallic
+  // KHR_materials_ior: index of refraction, >= 1, or 0 for a dielectric F0 of 1 (the
+  // extension's specular-glossiness conversion). Sets F0 = ((ior − 1)/(ior + 1))².
+  float ior = 1.5f;
+  // KHR_materials_specular: the strength of the dielectric specular reflection (0 = a purely
+  // diffuse dielectric), [0, 1], × specularTexture.a (linear); and its F0 colour, >= 0,
+  // × specularColorTexture.rgb (decoded from sRGB).
+  float specularFactor = 1.0f;
+  TextureRef specularTexture;
+  glm::vec3 specularColorFactor{1.0f};  // linear RGB
+  TextureRef specularColorTexture;
   TextureRef normalTexture;             // kept for export; not used for lighting
   TextureRef occlusionTexture;          // kept for export; not used for lighting
   glm::vec3 emissiveFactor{0.0f};       // linear RGB
