@@ -241,6 +241,39 @@ TEST(GltfExport, LightmapRecordRoundTrip) {
   }
 }
 
+// The emission side survives a round trip (bake --single-sided-emission writes it for render
+// and relight to follow), and the obsolete doubleSidedEmission of earlier versions is ignored
+// with a warning that names the file and material.
+TEST(GltfExport, SingleSidedEmissionRoundTrip) {
+  Scene scene = decoratedCornellBox();
+  ASSERT_GE(scene.materials.size(), 2u);
+  for (Material& m : scene.materials) m.doubleSided = true;
+  scene.materials[0].singleSidedEmission = true;
+  const std::string dir = test::tempDir("export_emission_side");
+  ASSERT_TRUE(saveGltf(scene, dir + "/e.gltf").isOk());
+  Result<Scene> back = loadGltf(dir + "/e.gltf");
+  ASSERT_TRUE(back.isOk()) << back.message();
+  EXPECT_TRUE(back->materials[0].singleSidedEmission);
+  EXPECT_FALSE(back->materials[0].emitsFromBack());
+  EXPECT_FALSE(back->materials[1].singleSidedEmission);
+  EXPECT_TRUE(back->materials[1].emitsFromBack());
+
+  std::string text = test::slurp(dir + "/e.gltf");
+  const size_t at = text.find("\"singleSidedEmission\"");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, std::string("\"singleSidedEmission\"").size(), "\"doubleSidedEmission\"");
+  std::ofstream(dir + "/old.gltf") << text;
+  Result<Scene> old = loadGltf(dir + "/old.gltf");
+  ASSERT_TRUE(old.isOk()) << old.message();
+  EXPECT_TRUE(old->materials[0].emitsFromBack());  // glTF's rule, whatever the old flag said
+  bool warned = false;
+  for (const std::string& w : old->warnings)
+    warned |= w.find("old.gltf") != std::string::npos &&
+              w.find(scene.materials[0].name) != std::string::npos &&
+              w.find("doubleSidedEmission is obsolete") != std::string::npos;
+  EXPECT_TRUE(warned);
+}
+
 // What the importer does not model (accessor bounds, component types, the lightmap record) is
 // checked in the JSON itself.
 TEST(GltfExport, WritesTheExpectedJson) {
