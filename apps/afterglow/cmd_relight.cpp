@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <cstdlib>
+#include <optional>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -12,9 +14,11 @@
 #include <nlohmann/json.hpp>
 
 #include "afterglow/baker/bake_output.h"
+#include "afterglow/baker/clusters.h"
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/status.h"
 #include "afterglow/runtime/runtime.h"
+#include "afterglow/scenes/gltf.h"
 #include "args.h"
 #include "commands.h"
 #include "common.h"
@@ -40,8 +44,16 @@ const char kRelightHelp[] =
     "  --bounce NAME=x              a light's bounce intensity (its share in bounced light)\n"
     "  --disable NAME               switch a light off\n"
     "  --sky r,g,b                  constant sky radiance, linear\n"
-    "  --albedo MAT=r,g,b           a material's diffuse albedo for bounces (and its base colour\n"
-    "                               in RELIT/scene.gltf)\n"
+    "  --albedo MAT=r,g,b           a material's bounce albedo, linear (what the bake derives\n"
+    "                               from its base colour, metallic, roughness and specular).\n"
+    "                               RELIT/scene.gltf gets the base colour that gives it, the\n"
+    "                               other factors kept, so a bake of it gives these lightmaps\n"
+    "                               (exactly for an untextured material; textured ones scale\n"
+    "                               by their texture here, approximately in a bake). Where no\n"
+    "                               base colour in [0, 1] gives it (a rough dielectric above\n"
+    "                               0.98, a mirror metal), the material is written Lambertian:\n"
+    "                               metallic 0, KHR_materials_specular specularFactor 0, base\n"
+    "                               colour = the albedo, with a warning naming it\n"
     "  --emission MAT=r,g,b         a material's emitted radiance (materials that were emissive\n"
     "                               when baked)\n"
     "  --indirect-intensity X       scales all bounced light\n"
@@ -86,6 +98,82 @@ int resolve(const std::string& name, int count, int (runtime::Runtime::*find)(co
     if (*end == '\0' && i >= 0 && i < count) return int(i);
   }
   return -1;
+}
+
+// Which glTF materials of the bake's scene.gltf carry each transport material. The bake writes
+// the scene's materials first, in the transport's order (the transport appends "default" for
+// glTF's default material when primitives without a material are lightmapped), then a
+// MOZ_lightmap copy per material and atlas for the lightmapped primitives, which names its
+// original in extras.afterglow.material (-1 for the default material). Copies written before
+// that field are recognised by their name, the original's (or "material-1") + "_lightmap<i>".
+struct MaterialMap {
+  size_t originals = 0;   // glTF materials before the first copy
+  int defaultIndex = -1;  // the transport's index of glTF's default material, if it has one
+  std::string problem;    // why nothing maps, when the counts disagree
+
+  std::string why() const { return problem.empty() ? "scene.gltf has no material for it" : problem; }
+
+  // The scene material (Scene::material's index; -1 = the default) of a transport material.
+  int sceneMaterial(int material) const { return material == defaultIndex ? -1 : material; }
+
+  std::vector<size_t> gltfMaterials(const json& gltf, int material) const {
+    std::vector<size_t> found;
+    if (!problem.empty() || !gltf.contains("materials") || !gltf["materials"].is_array())
+      return found;
+    const json& materials = gltf["materials"];
+    const int source = sceneMaterial(material);
+    if (source >= 0 && size_t(source) < originals) found.push_back(size_t(source));
+    const std::string sourceName =
+        source >= 0 && size_t(source) < originals && materials[size_t(source)].contains("name") &&
+                materials[size_t(source)]["name"].is_string()
+            ? materials[size_t(source)]["name"].get<std::string>()
+            : format("material%d", source);
+    for (size_t j = originals; j < materials.size(); ++j) {
+      const json* extras = copyExtras(materials[j]);
+      if (!extras) continue;
+      if (extras->contains("material") && (*extras)["material"].is_number_integer()) {
+        if ((*extras)["material"].get<int>() == source) found.push_back(j);
+      } else if (extras->contains("atlas") && (*extras)["atlas"].is_number_integer() &&
+                 materials[j].value("name", std::string()) ==
+                     sourceName + format("_lightmap%d", (*extras)["atlas"].get<int>())) {
+        found.push_back(j);
+      }
+    }
+    return found;
+  }
+
+  // MOZ_lightmap.extras.afterglow of a lightmapped copy, or null.
+  static const json* copyExtras(const json& material) {
+    if (!material.is_object() || !material.contains("extensions") ||
+        !material["extensions"].is_object() ||
+        !material["extensions"].contains("MOZ_lightmap"))
+      return nullptr;
+    const json& lightmap = material["extensions"]["MOZ_lightmap"];
+    if (!lightmap.is_object() || !lightmap.contains("extras") ||
+        !lightmap["extras"].is_object() || !lightmap["extras"].contains("afterglow") ||
+        !lightmap["extras"]["afterglow"].is_object())
+      return nullptr;
+    return &lightmap["extras"]["afterglow"];
+  }
+};
+
+MaterialMap mapMaterials(const json& gltf, int transportMaterials) {
+  MaterialMap map;
+  if (gltf.contains("materials") && gltf["materials"].is_array())
+    for (const json& m : gltf["materials"]) {
+      if (m.is_object() && m.contains("extensions") && m["extensions"].is_object() &&
+          m["extensions"].contains("MOZ_lightmap"))
+        break;
+      ++map.originals;
+    }
+  if (size_t(transportMaterials) == map.originals + 1) {
+    map.defaultIndex = transportMaterials - 1;
+  } else if (size_t(transportMaterials) != map.originals) {
+    map.problem = format("scene.gltf has %zu materials before its lightmapped copies, the "
+                         "transport %d, so they cannot be matched",
+                         map.originals, transportMaterials);
+  }
+  return map;
 }
 
 }  // namespace
@@ -154,10 +242,7 @@ int runRelight(int argc, char** argv, int first) {
     return gltfLights && gltfLights->is_array() && size_t(i) < gltfLights->size()
                ? &(*gltfLights)[size_t(i)] : nullptr;
   };
-  auto gltfMaterial = [&](int i) -> json* {
-    return gltf.contains("materials") && size_t(i) < gltf["materials"].size()
-               ? &gltf["materials"][size_t(i)] : nullptr;
-  };
+  const MaterialMap materialMap = mapMaterials(gltf, rt->materialCount());
 
   json changes = json::array();
   auto findLight = [&](const std::string& option, const std::string& name, int* light) {
@@ -228,18 +313,77 @@ int runRelight(int argc, char** argv, int first) {
     settings["skyImage"] = "";
     changes.push_back({{"sky", {v[0], v[1], v[2]}}});
   }
+  // --albedo sets the bounce albedo; the glTF gets the base colour giving it, on the material
+  // and on the bake's lightmapped copies of it, with the material's other factors read back
+  // through the importer (as the bake reads them). Loaded on the first --albedo only.
+  std::optional<scenes::Scene> bakedScene;
+  std::vector<std::string> warnings;
   for (const std::string& a : args.getAll("albedo")) {
     int material = -1;
     if (!splitAssignment(a, name, value) || !parseFloats(value, v) || v.size() != 3)
       return usage("--albedo wants MAT=r,g,b, got '" + a + "'");
     if (!findMaterial("albedo", name, &material)) return usage(error);
-    rt->setAlbedo(material, glm::vec3(v[0], v[1], v[2]));
-    if (json* m = gltfMaterial(material)) {
-      json& factor = (*m)["pbrMetallicRoughness"]["baseColorFactor"];
-      const float alpha = factor.is_array() && factor.size() == 4 ? factor[3].get<float>() : 1.0f;
-      factor = {v[0], v[1], v[2], alpha};
+    const glm::vec3 albedo(v[0], v[1], v[2]);
+    rt->setAlbedo(material, albedo);
+    json change = {{"material", rt->materialName(material)}, {"albedo", {v[0], v[1], v[2]}}};
+    if (!bakedScene) {
+      scenes::LoadOptions load;
+      load.loadTextures = false;
+      Result<scenes::Scene> loaded = scenes::loadGltf((in / "scene.gltf").string(), load);
+      if (!loaded) {
+        printError(loaded.message());
+        return kExitBadInput;
+      }
+      bakedScene = std::move(loaded.value());
     }
-    changes.push_back({{"material", rt->materialName(material)}, {"albedo", {v[0], v[1], v[2]}}});
+    const std::string label = "material '" + rt->materialName(material) + "'";
+    const std::vector<size_t> targets = materialMap.gltfMaterials(gltf, material);
+    if (targets.empty()) {
+      warnings.push_back(label + ": " + materialMap.why() +
+                         "; its base colour is not written, so a bake of RELIT/scene.gltf will "
+                         "differ from these lightmaps");
+      changes.push_back(change);
+      continue;
+    }
+    const scenes::Material& params = bakedScene->material(materialMap.sceneMaterial(material));
+    glm::vec3 base;
+    const bool invertible = baker::baseColorForAlbedoFactor(params, albedo, &base);
+    if (!invertible) {
+      base = glm::clamp(albedo, glm::vec3(0.0f), glm::vec3(1.0f));
+      const std::string albedoText = format("%g, %g, %g", v[0], v[1], v[2]);
+      if (base == albedo)
+        warnings.push_back(format(
+            "%s: no base colour in [0, 1] gives bounce albedo %s with its metallic %g, roughness "
+            "%g and specular; RELIT/scene.gltf makes it Lambertian (metallicFactor 0, "
+            "KHR_materials_specular specularFactor 0, base colour = the albedo), so a bake of it "
+            "gives these lightmaps", label.c_str(), albedoText.c_str(),
+            double(params.metallicFactor), double(params.roughnessFactor)));
+      else
+        warnings.push_back(format(
+            "%s: bounce albedo %s is outside [0, 1], which no glTF material reflects; "
+            "RELIT/scene.gltf makes it Lambertian with base colour %g, %g, %g (clamped), so a "
+            "bake of it will differ from these lightmaps", label.c_str(), albedoText.c_str(),
+            double(base.r), double(base.g), double(base.b)));
+    }
+    for (size_t j : targets) {
+      json& m = gltf["materials"][j];
+      json& pbr = m["pbrMetallicRoughness"];
+      json& factor = pbr["baseColorFactor"];
+      const float alpha = factor.is_array() && factor.size() == 4 && factor[3].is_number()
+                              ? factor[3].get<float>() : 1.0f;
+      factor = {base.r, base.g, base.b, alpha};
+      if (!invertible) {
+        pbr["metallicFactor"] = 0.0f;
+        m["extensions"]["KHR_materials_specular"]["specularFactor"] = 0.0f;
+        json& used = gltf["extensionsUsed"];
+        if (!used.is_array()) used = json::array();
+        if (std::find(used.begin(), used.end(), "KHR_materials_specular") == used.end())
+          used.push_back("KHR_materials_specular");
+      }
+    }
+    change["baseColorFactor"] = {base.r, base.g, base.b};
+    change["lambertian"] = !invertible;
+    changes.push_back(change);
   }
   for (const std::string& a : args.getAll("emission")) {
     int material = -1;
@@ -250,9 +394,15 @@ int runRelight(int argc, char** argv, int first) {
       return usage("--emission: material '" + rt->materialName(material) +
                    "' was not emissive when baked, so its light was never traced (bake it with "
                    "some emission to relight it)");
-    if (json* m = gltfMaterial(material)) {
-      (*m)["emissiveFactor"] = {v[0], v[1], v[2]};
-      if (m->contains("extensions")) (*m)["extensions"].erase("KHR_materials_emissive_strength");
+    const std::vector<size_t> targets = materialMap.gltfMaterials(gltf, material);
+    if (targets.empty())
+      warnings.push_back("material '" + rt->materialName(material) + "': " + materialMap.problem +
+                         "; its emission is not written, so a bake of RELIT/scene.gltf will "
+                         "differ from these lightmaps");
+    for (size_t j : targets) {
+      json& m = gltf["materials"][j];
+      m["emissiveFactor"] = {v[0], v[1], v[2]};
+      if (m.contains("extensions")) m["extensions"].erase("KHR_materials_emissive_strength");
     }
     changes.push_back(
         {{"material", rt->materialName(material)}, {"emission", {v[0], v[1], v[2]}}});
@@ -323,7 +473,8 @@ int runRelight(int argc, char** argv, int first) {
                        {"bounces", stats.bounces},
                        {"converged", stats.converged},
                        {"loadSeconds", loadSeconds},
-                       {"updateMilliseconds", stats.milliseconds}};
+                       {"updateMilliseconds", stats.milliseconds},
+                       {"warnings", warnings}};
   report["atlases"] = atlases;
   if (s) s = files.write((outDir / "report.json").string(), report.dump(2) + "\n");
   if (s && interrupted()) return interruptedExit();
@@ -339,6 +490,7 @@ int runRelight(int argc, char** argv, int first) {
     std::printf("solved        %d bounces%s in %.1f ms\n", stats.bounces,
                 stats.converged ? " (converged)" : "", stats.milliseconds);
     std::printf("wrote         %s (%d atlases)\n", outDir.string().c_str(), rt->atlasCount());
+    for (const std::string& w : warnings) std::printf("warning       %s\n", w.c_str());
   }
   return kExitOk;
 }

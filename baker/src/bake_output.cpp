@@ -70,6 +70,8 @@ Result<SavedGltf> saveAndReadGltf(const scenes::Scene& scene, const std::string&
 
 // Gives every lightmapped primitive a material of its atlas carrying MOZ_lightmap (materials
 // shared by instances in different atlases are duplicated; the originals stay for unlit users).
+// Each copy names the material it copies in MOZ_lightmap.extras.afterglow.material (its glTF
+// index, -1 for glTF's default material), so `relight` changes the copies with the original.
 void attachLightmaps(json& doc, size_t atlasCount, std::vector<std::string>& warnings) {
   json& images = doc["images"];
   if (!images.is_array()) images = json::array();
@@ -132,7 +134,9 @@ void attachLightmaps(json& doc, size_t atlasCount, std::vector<std::string>& war
             {"intensity", 1.0},
             {"extras",
              {{"afterglow",
-               {{"atlas", atlas}, {"exr", format("lightmaps/lightmap%d.exr", atlas)}}}}}};
+               {{"atlas", atlas},
+                {"exr", format("lightmaps/lightmap%d.exr", atlas)},
+                {"material", m}}}}}};
         found = materialFor.emplace(key, int(materials.size())).first;
         materials.push_back(std::move(mat));
       }

@@ -105,6 +105,49 @@ glm::vec3 diffuseAlbedoFactor(const scenes::Material& m) {
   return bounceAlbedo(in);
 }
 
+bool baseColorForAlbedoFactor(const scenes::Material& material, glm::vec3 albedo,
+                              glm::vec3* baseColor) {
+  scenes::Material m = material;
+  auto factorAt = [&](glm::vec3 base) {
+    m.baseColorFactor = glm::vec4(base, material.baseColorFactor.a);
+    return diffuseAlbedoFactor(m);
+  };
+  const glm::vec3 a0 = factorAt(glm::vec3(0.0f)), a1 = factorAt(glm::vec3(1.0f));
+  glm::vec3 base = glm::vec3(material.baseColorFactor);
+  constexpr float kSlack = 1e-6f;  // rounding of an albedo at a0 or a1 itself
+  for (int c = 0; c < 3; ++c) {
+    if (!std::isfinite(albedo[c])) return false;
+    if (a1[c] == a0[c]) {
+      if (albedo[c] != a0[c]) return false;
+      continue;  // any base colour gives it: keep the material's
+    }
+    const float b = (albedo[c] - a0[c]) / (a1[c] - a0[c]);
+    if (!(b >= -kSlack && b <= 1.0f + kSlack)) return false;
+    base[c] = glm::clamp(b, 0.0f, 1.0f);
+  }
+  // The channels are independent (max(dielectricF0) does not depend on the base colour): try
+  // the neighbouring floats of each for one that gives the albedo bit for bit.
+  glm::vec3 got = factorAt(base);
+  for (int c = 0; c < 3; ++c) {
+    float best = base[c];
+    float error = std::abs(got[c] - albedo[c]);
+    for (float dir : {-1.0f, 1.0f}) {
+      float b = base[c];
+      for (int step = 0; step < 4 && error > 0.0f; ++step) {
+        b = std::nextafter(b, dir > 0.0f ? 2.0f : -1.0f);
+        if (b < 0.0f || b > 1.0f) break;
+        glm::vec3 trial = base;
+        trial[c] = b;
+        const float e = std::abs(factorAt(trial)[c] - albedo[c]);
+        if (e < error) best = b, error = e;
+      }
+    }
+    base[c] = best;
+  }
+  *baseColor = base;
+  return true;
+}
+
 glm::vec3 emittedRadiance(const scenes::Scene& scene, int material, glm::vec2 uv0) {
   const scenes::Material& m = scene.material(material);
   if (!m.emissive()) return glm::vec3(0.0f);

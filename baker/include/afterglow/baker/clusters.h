@@ -102,6 +102,15 @@ glm::vec3 diffuseAlbedo(const scenes::Scene& scene, int material, glm::vec2 uv0)
 // bounceAlbedo of a material's factors alone (every texture read as 1): the transport's
 // material albedo, which the per-cluster texture ratios multiply.
 glm::vec3 diffuseAlbedoFactor(const scenes::Material& material);
+// The base colour whose diffuseAlbedoFactor is `albedo`, the material's other factors kept
+// (metallic, roughness, ior, specular, specular colour). Per channel the factor is affine in
+// the base colour, a0 + (a1 − a0) × base with a0, a1 the factor at base 0 and 1, so the base is
+// (albedo − a0) / (a1 − a0), nudged by a few ulps where that makes the factor equal `albedo`
+// exactly. False, with *baseColor unchanged, when some channel has no base colour in [0, 1]
+// (glTF's range for baseColorFactor): a1 == a0 ≠ albedo (a mirror metal, roughness 0, whose
+// base colour only tints a specular share its roughness removes), or albedo outside [a0, a1].
+bool baseColorForAlbedoFactor(const scenes::Material& material, glm::vec3 albedo,
+                              glm::vec3* baseColor);
 // Emitted radiance of a material at a UV, linear RGB.
 glm::vec3 emittedRadiance(const scenes::Scene& scene, int material, glm::vec2 uv0);
 
