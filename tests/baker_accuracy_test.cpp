@@ -1,9 +1,9 @@
 // The default bake against the reference path tracer on the measured Cornell box of
-// ../shared/scenes (McGuire's, with its emissive ceiling lamp emitting downwards), unwrapped into one 256² atlas:
-// relative RMSE ≤ 3% over valid texels and mean bias ≤ 1%, for direct and for indirect light.
-// The errors are per texel and relative to the texel's own value (baker::compareToReference);
-// the reference runs 32768 paths per texel over every 32nd valid texel, so its own noise stays
-// near 1% and cannot hide a real error.
+// ../shared/scenes (McGuire's, its emissive ceiling lamp emitting downwards only), unwrapped
+// into one 256² atlas: relative RMSE ≤ 3% over valid texels and mean bias ≤ 1%, for direct and
+// for indirect light. The errors are per texel and relative to the texel's own value
+// (baker::compareToReference); the reference runs 32768 paths per texel over every 32nd valid
+// texel, so its own noise stays near 1% and cannot hide a real error.
 #include <cstdio>
 
 #include <gtest/gtest.h>
