@@ -6,6 +6,8 @@ find_package(OpenImageIO REQUIRED)
 find_package(OpenMesh REQUIRED)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 find_package(embree 3 REQUIRED)
+# CGAL (header-only in Debian's libcgal-dev) for the light probes' Delaunay tetrahedralisation.
+find_package(CGAL REQUIRED)
 
 # tinygltf: Debian ships the single header; we compile its implementation ourselves in
 # scenes/src/tinygltf_impl.cpp without stb_image so that textures load through OpenImageIO

@@ -8,6 +8,7 @@ packages=(
   libembree-dev libopenimageio-dev openimageio-tools libopenmesh-dev libglm-dev
   libtinygltf-dev libstb-dev nlohmann-json3-dev libeigen3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libcgal-dev
   clang libclang-rt-14-dev
 )
 

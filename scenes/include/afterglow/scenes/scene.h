@@ -159,6 +159,16 @@ struct Camera {
   int node = -1;
 };
 
+// extras.afterglow.probeVolume on a glTF node: a box of light probes, centred on the node and
+// turned by its world transform.
+struct ProbeVolume {
+  std::string name;               // the node's name (or "node<i>")
+  int node = -1;
+  glm::mat4 transform{1.0f};      // node to world
+  glm::vec3 size{0.0f};           // "size": metres along the node's axes (before its scale)
+  float spacing = 0.0f;           // "spacing": metres; 0 = the placement's own
+};
+
 struct Bounds {
   glm::vec3 min{1e30f};
   glm::vec3 max{-1e30f};
@@ -175,6 +185,7 @@ struct Scene {
   std::vector<Instance> instances;
   std::vector<Light> lights;
   std::vector<Camera> cameras;
+  std::vector<ProbeVolume> probeVolumes;
   std::vector<std::string> warnings;  // everything the loader skipped or fixed up
 
   // The material of a primitive, or the glTF default material for -1.
