@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -396,6 +397,8 @@ struct SharedCase {
   const char* file;
   const char* name;
 };
+
+void PrintTo(const SharedCase& c, std::ostream* os) { *os << c.name; }
 
 class SharedScenePlacement : public ::testing::TestWithParam<SharedCase> {};
 
