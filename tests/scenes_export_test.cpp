@@ -241,6 +241,71 @@ TEST(GltfExport, LightmapRecordRoundTrip) {
   }
 }
 
+// extras.afterglow.probeVolume survives a round trip: the box's node, turn and size, and its
+// spacing only when it had one.
+TEST(GltfExport, ProbeVolumeRoundTrip) {
+  Scene scene = decoratedCornellBox();
+  ProbeVolume turned;
+  turned.name = "hall_probes";
+  turned.transform = glm::mat4(0.8f, 0.0f, -0.6f, 0.0f,  // 36.87 degrees about +Y
+                               0.0f, 1.0f, 0.0f, 0.0f,
+                               0.6f, 0.0f, 0.8f, 0.0f,
+                               1.5f, 2.0f, -3.0f, 1.0f);
+  turned.size = glm::vec3(4.0f, 2.5f, 1.25f);
+  turned.spacing = 0.5f;
+  ProbeVolume plain;
+  plain.name = "plain";
+  plain.size = glm::vec3(1.0f);
+  scene.probeVolumes = {turned, plain};
+  const std::string dir = test::tempDir("export_probe_volume");
+  ASSERT_TRUE(saveGltf(scene, dir + "/pv.gltf").isOk());
+  Result<Scene> back = loadGltf(dir + "/pv.gltf");
+  ASSERT_TRUE(back.isOk()) << back.message();
+  ASSERT_EQ(back->probeVolumes.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const ProbeVolume& x = scene.probeVolumes[i];
+    const ProbeVolume& y = back->probeVolumes[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_GE(y.node, 0);
+    EXPECT_EQ(x.size, y.size) << x.name;
+    EXPECT_EQ(x.spacing, y.spacing) << x.name;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) EXPECT_NEAR(x.transform[c][r], y.transform[c][r], 1e-6f) << x.name;
+  }
+  EXPECT_EQ(back->instances.size(), scene.instances.size());  // no mesh on the volumes' nodes
+}
+
+// A probe volume of no size is an import error naming the file and node (a placement that
+// ignored it would fill the whole level); so are a malformed size and spacing.
+TEST(GltfImport, BadProbeVolumeIsAnError) {
+  const std::string dir = test::tempDir("import_probe_volume");
+  auto write = [&](const std::string& name, const std::string& probeVolume) {
+    const std::string path = dir + "/" + name + ".gltf";
+    std::ofstream(path) << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+      "nodes": [{"name": "attic_probes", "translation": [1, 2, 3],
+                 "extras": {"afterglow": {"probeVolume": )" << probeVolume << "}}}]}";
+    return path;
+  };
+  Result<Scene> good = loadGltf(write("good", R"({"size": [2, 1, 0.5], "spacing": 0.25})"));
+  ASSERT_TRUE(good.isOk()) << good.message();
+  ASSERT_EQ(good->probeVolumes.size(), 1u);
+  EXPECT_EQ(good->probeVolumes[0].name, "attic_probes");
+  EXPECT_EQ(good->probeVolumes[0].size, glm::vec3(2.0f, 1.0f, 0.5f));
+  EXPECT_EQ(good->probeVolumes[0].spacing, 0.25f);
+  EXPECT_EQ(glm::vec3(good->probeVolumes[0].transform[3]), glm::vec3(1.0f, 2.0f, 3.0f));
+  for (const char* bad : {R"({"size": [0, 1, 1]})", R"({"size": [1, -1, 1]})",
+                          R"({"size": [1, 1]})", R"({"size": "big"})",
+                          R"({"size": [1, 1, 1], "spacing": 0})",
+                          R"({"size": [1, 1, 1], "spacing": "fine"})", R"(7)"}) {
+    const std::string path = write("bad", bad);
+    Result<Scene> r = loadGltf(path);
+    ASSERT_FALSE(r.isOk()) << bad;
+    EXPECT_NE(r.message().find(path), std::string::npos) << r.message();
+    EXPECT_NE(r.message().find("attic_probes"), std::string::npos) << r.message();
+    EXPECT_EQ(r.message().find('\n'), std::string::npos) << r.message();
+  }
+}
+
 // The emission side survives a round trip (bake --single-sided-emission writes it for render
 // and relight to follow), and the obsolete doubleSidedEmission of earlier versions is ignored
 // with a warning that names the file and material.

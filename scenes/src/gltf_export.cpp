@@ -396,6 +396,17 @@ struct Exporter {
       if (!ag.empty()) node["extras"]["afterglow"] = std::move(ag);
       nodes.push_back(std::move(node));
     }
+    // Probe volumes on nodes of their own (a volume that shared a node with a mesh comes back
+    // as two nodes of one name; placement reads only the box).
+    for (const ProbeVolume& volume : scene.probeVolumes) {
+      json node;
+      if (!volume.name.empty()) node["name"] = volume.name;
+      if (volume.transform != glm::mat4(1.0f)) node["matrix"] = matrix(volume.transform);
+      json pv = {{"size", vec(volume.size)}};
+      if (volume.spacing > 0.0f) pv["spacing"] = num(volume.spacing);
+      node["extras"]["afterglow"]["probeVolume"] = std::move(pv);
+      nodes.push_back(std::move(node));
+    }
 
     json lights = json::array();
     const Light defaults;

@@ -1146,6 +1146,42 @@ class Importer {
     return settings;
   }
 
+  // extras.afterglow.probeVolume = {"size": [x, y, z], "spacing": s}: a box of light probes
+  // centred on the node (not inherited). A box of no volume or a malformed one is an error: a
+  // probe placement that silently ignored it would fill the whole level instead.
+  Status readProbeVolume(const tinygltf::Node& node, size_t index, const std::string& where,
+                         const glm::dmat4& world) {
+    const tinygltf::Value* ag = member(node.extras, "afterglow");
+    const tinygltf::Value* pv = ag ? member(*ag, "probeVolume") : nullptr;
+    if (!pv) return Status::ok();
+    if (!pv->IsObject()) return fail(where + ": extras.afterglow.probeVolume is not an object");
+    ProbeVolume volume;
+    volume.name = node.name.empty() ? format("node%zu", index) : node.name;
+    volume.node = int(index);
+    volume.transform = narrowMat(world);
+    const tinygltf::Value* size = member(*pv, "size");
+    bool sizeOk = size && size->IsArray() && size->ArrayLen() == 3;
+    for (int i = 0; sizeOk && i < 3; ++i) {
+      const tinygltf::Value& c = size->Get(i);
+      const double v = c.IsNumber() ? c.GetNumberAsDouble() : -1.0;
+      sizeOk = std::isfinite(v) && v > 0.0 && v < 1e9;
+      if (sizeOk) volume.size[i] = float(v);
+    }
+    if (!sizeOk)
+      return fail(where + ": extras.afterglow.probeVolume.size must be 3 positive finite numbers");
+    if (const tinygltf::Value* sp = member(*pv, "spacing")) {
+      const double v = sp->IsNumber() ? sp->GetNumberAsDouble() : -1.0;
+      if (!(std::isfinite(v) && v > 0.0 && v < 1e9))
+        return fail(where + ": extras.afterglow.probeVolume.spacing must be a positive number");
+      volume.spacing = float(v);
+    }
+    if (!std::isfinite(glm::determinant(world)) || std::abs(glm::determinant(world)) < 1e-30)
+      return fail(where + ": extras.afterglow.probeVolume is on a node whose transform has no "
+                          "volume");
+    scene_.probeVolumes.push_back(std::move(volume));
+    return Status::ok();
+  }
+
   // extras.afterglow.lightmap: where `afterglow uv` put this node's lightmap (not inherited).
   LightmapLocation readLightmap(const tinygltf::Node& node, const std::string& where) {
     LightmapLocation location;
@@ -1329,6 +1365,7 @@ class Importer {
         scene_.instances.push_back(std::move(inst));
         meshes.insert(node.mesh);
       }
+      if (Status pv = readProbeVolume(node, index, where, world); !pv) return pv;
       if (node.camera >= 0) placeCamera(node.camera, world, index, where);
       auto lights = node.extensions.find("KHR_lights_punctual");
       if (lights != node.extensions.end()) {
