@@ -83,16 +83,10 @@ int benchViews(int argc, char** argv) {
 
   // The material each pixel's centre ray hits (-1: a miss), through the renderer's camera.
   const int w = a->width, h = a->height;
-  const glm::vec3 right = glm::normalize(glm::cross(view.forward, view.up));
-  const float tanHalf = std::tan(0.5f * view.yfov), aspect = float(w) / float(h);
   std::vector<int> material(size_t(w) * size_t(h), -1);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      baker::Ray ray;
-      ray.origin = view.position;
-      const float cx = (2.0f * ((float(x) + 0.5f) / float(w)) - 1.0f) * tanHalf * aspect;
-      const float cy = (1.0f - 2.0f * ((float(y) + 0.5f) / float(h))) * tanHalf;
-      ray.direction = glm::normalize(view.forward + cx * right + cy * view.up);
+      const baker::Ray ray = baker::cameraRay(view, w, h, float(x) + 0.5f, float(y) + 0.5f);
       const baker::Hit hit = tracer.value()->intersect(ray);
       if (!hit.valid()) continue;
       const scenes::Instance& inst = scene->instances[hit.instance];

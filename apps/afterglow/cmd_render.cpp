@@ -91,10 +91,6 @@ int loadShading(const std::string& input, const scenes::Scene& scene, bool refer
   return kExitOk;
 }
 
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 }  // namespace
 
 int runRender(int argc, char** argv, int first) {

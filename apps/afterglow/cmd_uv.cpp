@@ -54,10 +54,6 @@ double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 // "2 × 4096x4096, 512x512": atlas sizes grouped, in order of first appearance.
 std::string atlasSummary(const std::vector<uv::AtlasMetrics>& atlases) {
   std::vector<std::pair<std::pair<int, int>, int>> groups;

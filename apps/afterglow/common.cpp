@@ -14,6 +14,11 @@
 
 namespace afterglow::cli {
 
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
 bool parseFloats(const std::string& text, std::vector<float>& out) {
   out.clear();
   const char* p = text.c_str();

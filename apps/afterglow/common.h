@@ -19,6 +19,8 @@ bool parseVec3(const std::string& text, glm::vec3* out);
 
 // Prints "afterglow: <message>" to stderr.
 void printError(const std::string& message);
+// Whether s ends in suffix (output file extensions).
+bool endsWith(const std::string& s, const std::string& suffix);
 
 // True when SCENE names a built-in scene ("builtin:cornell", "builtin:furnace").
 bool isBuiltinScene(const std::string& scene);

@@ -163,6 +163,10 @@ std::string resolveSkyImage(const std::string& recorded, const fs::path& reportD
 
 }  // namespace
 
+Ray cameraRay(const View& view, int width, int height, float x, float y) {
+  return PinholeCamera(view, width, height).ray(x, y);
+}
+
 View cameraView(const scenes::Camera& camera) {
   View v;
   v.position = glm::vec3(camera.transform * glm::vec4(0.0f, 0.0f, 0.0f, 1.0f));

@@ -35,6 +35,12 @@ View lookAtView(glm::vec3 from, glm::vec3 at, float yfov);
 // A view of the whole scene from above its −Z side, for scenes without cameras.
 View defaultView(const scenes::Scene& scene, float yfov);
 
+// The primary ray through picture point (x, y) of a width × height view, in pixels from the
+// top-left corner (pixel centres at +0.5): the one camera model of every picture afterglow
+// draws.
+struct Ray;
+Ray cameraRay(const View& view, int width, int height, float x, float y);
+
 struct RenderOptions {
   int width = 640;         // pixels
   int height = 480;        // pixels
