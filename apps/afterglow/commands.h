@@ -9,6 +9,7 @@ int runInfo(int argc, char** argv, int first);
 int runBake(int argc, char** argv, int first);
 int runRender(int argc, char** argv, int first);
 int runRelight(int argc, char** argv, int first);
+int runProbes(int argc, char** argv, int first);
 
 // Help texts (printed by --help, and after a usage error hint).
 extern const char kUvHelp[];
@@ -16,6 +17,7 @@ extern const char kInfoHelp[];
 extern const char kBakeHelp[];
 extern const char kRenderHelp[];
 extern const char kRelightHelp[];
+extern const char kProbesHelp[];
 extern const char kExitCodesHelp[];
 
 }  // namespace afterglow::cli

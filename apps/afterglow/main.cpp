@@ -32,6 +32,8 @@ const char kMainHelp[] =
     "                         ray trace a view of a baked scene (tone mapped or linear)\n"
     "  relight OUT/ -o RELIT/ new lightmaps from a bake's transport with changed lights,\n"
     "                         sky, albedo or emission (the runtime's re-solve)\n"
+    "  probes place SCENE -o PROBES.json\n"
+    "                         place light probes and tetrahedralise them\n"
     "\n"
     "SCENE is a .gltf or .glb file, or a built-in scene: builtin:cornell, builtin:furnace.\n"
     "Run 'afterglow COMMAND --help' for a command's options.\n"
@@ -66,6 +68,8 @@ int main(int argc, char** argv) {
       std::printf("%s\n%s", kRenderHelp, kExitCodesHelp);
     else if (topic == "relight")
       std::printf("%s\n%s", kRelightHelp, kExitCodesHelp);
+    else if (topic == "probes")
+      std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
     else
       std::printf("%s%s", kMainHelp, kExitCodesHelp);
     return kExitOk;
@@ -79,6 +83,7 @@ int main(int argc, char** argv) {
   if (command == "bake") return runBake(argc, argv, 2);
   if (command == "render") return runRender(argc, argv, 2);
   if (command == "relight") return runRelight(argc, argv, 2);
+  if (command == "probes") return runProbes(argc, argv, 2);
   printError((command[0] == '-' ? "unknown option '" : "unknown command '") + command +
              "' (see afterglow --help)");
   return kExitUsage;

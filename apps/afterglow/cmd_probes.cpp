@@ -1,0 +1,239 @@
+// `afterglow probes place`: light-probe placement (probes::placeProbes), their tetrahedra
+// (probes::tetrahedralize), written as PROBES.json with a picture beside it.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/render.h"
+#include "afterglow/core/atomic_file.h"
+#include "afterglow/core/parallel.h"
+#include "afterglow/core/progress.h"
+#include "afterglow/probes/placement.h"
+#include "afterglow/probes/placement_picture.h"
+#include "afterglow/probes/probes_file.h"
+#include "afterglow/probes/tetrahedralize.h"
+#include "args.h"
+#include "commands.h"
+#include "common.h"
+
+namespace fs = std::filesystem;
+
+namespace afterglow::cli {
+
+const char kProbesHelp[] =
+    "Usage: afterglow probes place SCENE -o PROBES.json [options]\n"
+    "\n"
+    "Places light probes for dynamic objects: a grid over the static geometry (or over the probe\n"
+    "volumes authored on glTF nodes as extras.afterglow.probeVolume = {\"size\": [x, y, z],\n"
+    "\"spacing\": s}), refined on an octree where it holds or touches geometry, never inside\n"
+    "geometry (a candidate whose rays mostly see the backs of single-sided surfaces is moved to\n"
+    "a free spot in its cell or dropped) and kept a margin off surfaces; then a Delaunay\n"
+    "tetrahedralisation of the probes for interpolation. Writes, all or nothing:\n"
+    "  PROBES.json   positions, kinds (grid, refined, moved, pinned), tetrahedra and their\n"
+    "                neighbours, settings and summary (README: the light probes file)\n"
+    "  PROBES.png    the probes over the scene from its first camera (or an overview), coloured\n"
+    "                by kind: grid white, refined cyan, moved orange, pinned magenta\n"
+    "and prints a summary: candidates, placed, rejected inside geometry, moved, refined, time.\n"
+    "SCENE is a .gltf or .glb file, or a built-in scene: builtin:cornell, builtin:furnace.\n"
+    "\n"
+    "Options:\n"
+    "  -o, --output PROBES.json  output file; required\n"
+    "  --spacing M               metres between grid probes (default: from the level's size,\n"
+    "                            printed)\n"
+    "  --levels N                finer octree levels near geometry (default 2)\n"
+    "  --margin M                metres kept off surfaces (default: a tenth of the finest\n"
+    "                            spacing)\n"
+    "  --max-probes N            refuse more probes than this (default 100000)\n"
+    "  --add FILE.json           the user's own probes ({\"positions\": [[x, y, z], ...],\n"
+    "                            \"names\": [...]}), pinned, never moved; one inside geometry is\n"
+    "                            warned about by name\n"
+    "  --width N, --height N     the picture's size (default 960 x 600)\n"
+    "  --threads N               worker threads (default: every core); the output is identical\n"
+    "                            for any count\n"
+    "  --quiet                   no progress and no summary\n"
+    "  -h, --help                this help\n";
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+int runPlace(int argc, char** argv, int first) {
+  auto usage = [](const std::string& message) {
+    printError("probes place: " + message + " (see afterglow probes --help)");
+    return int(kExitUsage);
+  };
+  Args args;
+  if (!args.parse(argc, argv, first,
+                  {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"},
+                   {"add"}, {"width"}, {"height"}, {"threads"}, {"quiet", 0, false},
+                   {"help", 'h', false}}))
+    return usage(args.error());
+  if (args.has("help")) {
+    std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
+    return kExitOk;
+  }
+  if (args.positional().empty()) return usage("missing SCENE");
+  if (args.positional().size() > 1)
+    return usage("one SCENE only, got '" + args.positional()[1] + "' too");
+  const std::string input = args.positional()[0];
+  if (!args.has("output")) return usage("missing -o PROBES.json");
+  const std::string output = args.get("output");
+  if (!endsWith(output, ".json"))
+    return usage("the output must end in .json, got '" + output + "'");
+
+  probes::PlacementOptions options;
+  int threads = 0, width = 960, height = 600, maxProbes = int(options.maxProbes);
+  if (!args.getFloat("spacing", 0.0f, 0.0f, 1e6f, &options.spacing) ||
+      !args.getInt("levels", options.levels, 0, 8, &options.levels) ||
+      !args.getFloat("margin", 0.0f, -1e-30f, 1e6f, &options.margin) ||
+      !args.getInt("max-probes", maxProbes, 1, 100000000, &maxProbes) ||
+      !args.getInt("width", width, 16, 8192, &width) ||
+      !args.getInt("height", height, 16, 8192, &height) ||
+      !args.getInt("threads", 0, 0, 1024, &threads))
+    return usage(args.error());
+  options.maxProbes = size_t(maxProbes);
+  const bool quiet = args.has("quiet");
+  setThreadCount(threads);
+
+  ConsoleProgress progress(stderr, quiet);
+  InterruptGuard guard(progress);
+  const auto start = Clock::now();
+
+  std::vector<std::string> userNames;
+  if (args.has("add")) {
+    Result<probes::UserProbes> user = probes::readUserProbes(args.get("add"));
+    if (!user) {
+      printError(user.message());
+      return kExitBadInput;
+    }
+    options.userProbes = user->positions;
+    options.userNames = user->names;
+  }
+
+  bool badArgument = false;
+  Result<scenes::Scene> loaded = loadSceneArgument(input, false, &badArgument);
+  if (interrupted()) return interruptedExit();
+  if (!loaded) {
+    printError(loaded.message());
+    return badArgument ? kExitUsage : kExitBadInput;
+  }
+  const scenes::Scene& scene = loaded.value();
+  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  if (!tracer) {
+    printError(input + ": " + tracer.message());
+    return kExitBadInput;
+  }
+
+  Result<probes::Placement> placed = probes::placeProbes(scene, *tracer.value(), options, progress);
+  if (interrupted() || progress.cancelled()) return interruptedExit();
+  if (!placed) {
+    printError(input + ": " + placed.message());
+    return kExitBadInput;
+  }
+  const probes::Placement& placement = placed.value();
+  const double placeSeconds = secondsSince(start);
+
+  // The user's probes come first in the placement, in their file's order, with their names.
+  std::vector<std::string> names(placement.positions.size());
+  for (size_t i = 0, u = 0; i < placement.positions.size() && u < options.userNames.size(); ++i)
+    if (placement.kinds[i] == probes::ProbeKind::Pinned) names[i] = options.userNames[u++];
+
+  const auto tetStart = Clock::now();
+  Result<runtime::ProbeTetrahedra> mesh = probes::tetrahedralize(placement.positions);
+  if (!mesh) {
+    printError(input + ": " + mesh.message());
+    return kExitBadInput;
+  }
+  const double tetSeconds = secondsSince(tetStart);
+
+  baker::View view = scene.cameras.empty() ? baker::defaultView(scene, 0.9f)
+                                           : baker::cameraView(scene.cameras.front());
+  const std::vector<glm::vec3> picture =
+      probes::placementPicture(scene, *tracer.value(), placement, options.levels, view,
+                                 width, height);
+
+  size_t pinned = 0;
+  for (probes::ProbeKind k : placement.kinds) pinned += k == probes::ProbeKind::Pinned;
+  const nlohmann::json settings = {{"input", input},
+                                   {"spacing", placement.spacing},
+                                   {"levels", options.levels},
+                                   {"margin", placement.margin},
+                                   {"maxProbes", options.maxProbes},
+                                   {"add", args.get("add")},
+                                   {"threads", threadCount()}};
+  const nlohmann::json summary = {{"candidates", placement.candidates},
+                                  {"placed", placement.positions.size()},
+                                  {"rejectedInsideGeometry", placement.rejected},
+                                  {"moved", placement.moved},
+                                  {"refined", placement.refined},
+                                  {"pinned", pinned},
+                                  {"tetrahedra", mesh->tetrahedra.size()},
+                                  {"placeSeconds", placeSeconds},
+                                  {"tetrahedraSeconds", tetSeconds},
+                                  {"warnings", placement.warnings}};
+  const std::string text =
+      probes::probesJson(placement, names, mesh.value(), settings.dump(), summary.dump());
+
+  // Both files through temporaries, renamed only once both are written.
+  const fs::path outPath(output);
+  const std::string picturePath = (outPath.parent_path() / outPath.stem()).string() + ".png";
+  AtomicOutput files;
+  if (Status st = files.write(output, text); !st) {
+    printError(st.message());
+    return kExitOutput;
+  }
+  if (Status st = baker::writeRenderPng(files.tempPath(picturePath), width, height, picture, 0.0f);
+      !st) {
+    printError(st.message());
+    return kExitOutput;
+  }
+  if (interrupted()) return interruptedExit();
+  if (Status st = files.commit(); !st) {
+    printError(st.message());
+    return kExitOutput;
+  }
+  if (!quiet) {
+    std::printf("scene         %s\n", input.c_str());
+    std::printf("spacing       %.3g m%s, %d finer levels, margin %.3g m\n",
+                double(placement.spacing), options.spacing > 0.0f ? "" : " (from the level's size)",
+                options.levels, double(placement.margin));
+    std::printf("candidates    %zu\n", placement.candidates);
+    std::printf("placed        %zu (%zu refined, %zu moved, %zu pinned)\n",
+                placement.positions.size(), placement.refined, placement.moved, pinned);
+    std::printf("rejected      %zu inside geometry\n", placement.rejected);
+    std::printf("tetrahedra    %zu\n", mesh->tetrahedra.size());
+    std::printf("time          place %.2f s, tetrahedra %.2f s\n", placeSeconds, tetSeconds);
+    for (const std::string& w : scene.warnings) std::printf("warning       %s\n", w.c_str());
+    for (const std::string& w : placement.warnings) std::printf("warning       %s\n", w.c_str());
+    std::printf("wrote         %s, %s\n", output.c_str(), picturePath.c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int runProbes(int argc, char** argv, int first) {
+  const std::string verb = first < argc ? argv[first] : "";
+  if (verb == "place") return runPlace(argc, argv, first + 1);
+  if (verb == "-h" || verb == "--help" || verb == "help") {
+    std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
+    return kExitOk;
+  }
+  printError(verb.empty() ? "probes: missing a verb: place (see afterglow probes --help)"
+                          : "probes: unknown verb '" + verb +
+                                "', there is place (see afterglow probes --help)");
+  return kExitUsage;
+}
+
+}  // namespace afterglow::cli

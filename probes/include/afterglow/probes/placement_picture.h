@@ -1,0 +1,31 @@
+// A picture of the placed probes over the scene, so a person can check the placement at a glance:
+// the scene shaded plainly (base colour under a headlight, no bake needed), each probe a dot
+// coloured by its kind (grid white, refined cyan, moved orange, pinned magenta), drawn only
+// where the camera sees it, smaller with distance.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/baker/render.h"
+#include "afterglow/probes/placement.h"
+
+namespace afterglow::baker {
+class RayTracer;
+}
+
+namespace afterglow::probes {
+
+// Linear RGB, row 0 at the top (baker::writeRenderPng writes it). Deterministic.
+// `levels` is the placement's refinement depth (the dots' size follows the finest spacing).
+// Written with baker::writeRenderPng at exposure 0 stops, the dots show probeKindColour.
+std::vector<glm::vec3> placementPicture(const scenes::Scene& scene,
+                                        const baker::RayTracer& tracer, const Placement& placement,
+                                        int levels, const baker::View& view, int width,
+                                        int height);
+
+// The colour a kind is shown in, as the PNG's values.
+glm::vec3 probeKindColour(ProbeKind kind);
+
+}  // namespace afterglow::probes

@@ -1,0 +1,43 @@
+// The light probes' JSON file (`afterglow probes place -o PROBES.json`, and later the bake's
+// OUT/probes/light_probes.json):
+//   {
+//     "format": "afterglow-light-probes", "version": 1,
+//     "positions": [[x, y, z], ...],                    metres, world (glTF axes, +Y up)
+//     "kinds": ["grid" | "refined" | "moved" | "pinned", ...],   one per probe
+//     "names": {"<probe index>": "name", ...},         the user's probes that were named
+//     "tetrahedra": [[a, b, c, d], ...],                 probe indices, positively oriented
+//     "neighbours": [[n0, n1, n2, n3], ...],             across the face opposite each corner;
+//                                                        -1 on the hull
+//     "settings": {...}, "summary": {...}               how it was made
+//   }
+// A user's own probes (`--add FILE.json`) are read from the same "positions" (and optional
+// "names", a list of strings, one per position); any other member is ignored, so a PROBES.json
+// can be added back.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/core/status.h"
+#include "afterglow/probes/placement.h"
+#include "afterglow/runtime/probe_tetrahedra.h"
+
+namespace afterglow::probes {
+
+struct UserProbes {
+  std::vector<glm::vec3> positions;
+  std::vector<std::string> names;  // one per position ("" when unnamed)
+};
+
+// Reads a user's probes. Errors name the file and the probe: not JSON, no "positions" array,
+// a position that is not three finite numbers, "names" of the wrong length or type.
+Result<UserProbes> readUserProbes(const std::string& path);
+
+// The file's text. `settingsJson` and `summaryJson` are JSON objects as text ("{}" for none).
+std::string probesJson(const Placement& placement, const std::vector<std::string>& names,
+                       const runtime::ProbeTetrahedra& mesh, const std::string& settingsJson,
+                       const std::string& summaryJson);
+
+}  // namespace afterglow::probes
