@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets with clang (ASan + UBSan) and fuzzes the glTF importer, then the
-# transport file reader, each for a bounded time. Exits non-zero when a fuzzer finds a crash, a
+# Builds the libFuzzer targets with clang (ASan + UBSan) and fuzzes the glTF importer, the
+# transport file reader, then the light probes' user file (a small JSON parser: a third of the
+# time), each for a bounded time. Exits non-zero when a fuzzer finds a crash, a
 # leak, a timeout or an OOM.
 #   FUZZ_SECONDS  time budget per fuzzer in seconds (default 60)
 #   BUILD_DIR     build folder (default <repo>/build-fuzz)
@@ -18,7 +19,7 @@ cmake -S "$root" -B "$build" -G Ninja \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DAFTERGLOW_BUILD_FUZZERS=ON -DAFTERGLOW_BUILD_TESTS=OFF >/dev/null
-ninja -C "$build" -j"$jobs" gltf_fuzzer transport_fuzzer transport_seeds
+ninja -C "$build" -j"$jobs" gltf_fuzzer transport_fuzzer transport_seeds probes_fuzzer
 
 corpus="$build/fuzz-corpus/gltf"
 artifacts="$build/fuzz-artifacts"
@@ -48,3 +49,13 @@ echo "fuzzing transport_fuzzer for ${seconds}s (corpus $corpus, crashes go to $a
   -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=16384 \
   -artifact_prefix="$artifacts/" -print_final_stats=1
 echo "transport_fuzzer: no crash in ${seconds}s"
+
+corpus="$build/fuzz-corpus/probes"
+mkdir -p "$corpus"
+cp -n "$root"/fuzz/corpus/probes/* "$corpus"/
+probe_seconds=$(( seconds / 3 > 0 ? seconds / 3 : 1 ))
+echo "fuzzing probes_fuzzer for ${probe_seconds}s (corpus $corpus, crashes go to $artifacts)"
+"$build/fuzz/probes_fuzzer" "$corpus" \
+  -max_total_time="$probe_seconds" -timeout=10 -rss_limit_mb=2048 -max_len=4096 \
+  -artifact_prefix="$artifacts/" -print_final_stats=1
+echo "probes_fuzzer: no crash in ${probe_seconds}s"

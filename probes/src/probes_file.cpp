@@ -4,48 +4,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "afterglow/core/atomic_file.h"
 
 namespace afterglow::probes {
 
 using json = nlohmann::json;
-
-Result<UserProbes> readUserProbes(const std::string& path) {
-  Result<std::string> text = readFile(path);
-  if (!text) return text.status();
-  const json doc = json::parse(text.value(), nullptr, false);
-  if (doc.is_discarded() || !doc.is_object()) return Status::error(path + ": not a JSON object");
-  auto positions = doc.find("positions");
-  if (positions == doc.end() || !positions->is_array())
-    return Status::error(path + ": no \"positions\" array");
-  UserProbes out;
-  for (size_t i = 0; i < positions->size(); ++i) {
-    const json& p = (*positions)[i];
-    bool ok = p.is_array() && p.size() == 3;
-    glm::vec3 v(0.0f);
-    for (int k = 0; ok && k < 3; ++k) {
-      ok = p[size_t(k)].is_number() && std::isfinite(p[size_t(k)].get<double>());
-      if (ok) v[k] = float(p[size_t(k)].get<double>());
-      ok = ok && std::isfinite(v[k]);  // finite as a float too
-    }
-    if (!ok)
-      return Status::error(path + ": probe " + std::to_string(i) +
-                           " is not three finite numbers: " + p.dump());
-    out.positions.push_back(v);
-  }
-  out.names.assign(out.positions.size(), "");
-  if (auto names = doc.find("names"); names != doc.end() && names->is_array()) {
-    if (names->size() != out.positions.size())
-      return Status::error(path + ": \"names\" has " + std::to_string(names->size()) +
-                           " entries for " + std::to_string(out.positions.size()) + " positions");
-    for (size_t i = 0; i < names->size(); ++i) {
-      if (!(*names)[i].is_string())
-        return Status::error(path + ": name " + std::to_string(i) + " is not a string");
-      out.names[i] = (*names)[i].get<std::string>();
-    }
-  }
-  return out;
-}
 
 std::string probesJson(const Placement& placement, const std::vector<std::string>& names,
                        const runtime::ProbeTetrahedra& mesh, const std::string& settingsJson,

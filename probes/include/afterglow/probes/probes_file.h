@@ -34,6 +34,8 @@ struct UserProbes {
 // Reads a user's probes. Errors name the file and the probe: not JSON, no "positions" array,
 // a position that is not three finite numbers, "names" of the wrong length or type.
 Result<UserProbes> readUserProbes(const std::string& path);
+// The same from the file's text (`path` names it in errors).
+Result<UserProbes> parseUserProbes(const std::string& text, const std::string& path);
 
 // The file's text. `settingsJson` and `summaryJson` are JSON objects as text ("{}" for none).
 std::string probesJson(const Placement& placement, const std::vector<std::string>& names,
