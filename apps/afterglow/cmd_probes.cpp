@@ -144,7 +144,7 @@ int runPlace(int argc, char** argv, int first) {
   const probes::Placement& placement = placed.value();
   const double placeSeconds = secondsSince(start);
 
-  // The user's probes come first in the placement, in their file's order, with their names.
+  // The user's probes are the pinned ones, in their file's order: they take its names.
   std::vector<std::string> names(placement.positions.size());
   for (size_t i = 0, u = 0; i < placement.positions.size() && u < options.userNames.size(); ++i)
     if (placement.kinds[i] == probes::ProbeKind::Pinned) names[i] = options.userNames[u++];
