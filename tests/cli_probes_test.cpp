@@ -80,6 +80,24 @@ TEST(CliProbes, PlaceWritesProbesInsideTheRoomTheirTetrahedraAndAPicture) {
   EXPECT_EQ(picture->spec().height, 100);
 }
 
+// A placement added back with --add pins every probe it holds: the placed probes at those very
+// positions give way, so the second file has the same positions, all pinned.
+TEST(CliProbes, APlacementAddedBackIsPinnedWithoutDuplicates) {
+  const std::string dir = tempDir("cli_probes_add_back");
+  CliRun first = runCli(dir, "probes place builtin:cornell -o '" + dir + "/a.json' --quiet");
+  ASSERT_EQ(first.exitCode, 0) << first.err;
+  CliRun again = runCli(dir, "probes place builtin:cornell -o '" + dir + "/b.json' --add '" +
+                                 dir + "/a.json' --quiet");
+  ASSERT_EQ(again.exitCode, 0) << again.err;
+  const json a = json::parse(slurp(dir + "/a.json"), nullptr, false);
+  const json b = json::parse(slurp(dir + "/b.json"), nullptr, false);
+  ASSERT_TRUE(a.is_object() && b.is_object());
+  EXPECT_EQ(b["positions"].size(), a["positions"].size());
+  size_t pinned = 0;
+  for (const json& k : b["kinds"]) pinned += k == "pinned";
+  EXPECT_EQ(pinned, a["positions"].size());
+}
+
 TEST(CliProbes, BadUserProbesAndBudgetsAreRefusedAndWriteNothing) {
   const std::string dir = tempDir("cli_probes_bad");
   std::ofstream(dir + "/nan.json") << R"({"positions": [[0, 0, 0], [0.1, "x", 0.2]]})";

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <set>
 #include <string>
 
 #include "afterglow/baker/raytracer.h"
@@ -619,12 +620,17 @@ Result<Placement> placeProbes(const scenes::Scene& scene, const baker::RayTracer
   progress.end();
   if (progress.cancelled()) return Result<Placement>::error("cancelled");
 
+  // A placed probe exactly where the user pinned one gives way to it (a PROBES.json added back
+  // with --add pins every probe it holds), so no two probes share a position.
+  std::set<std::array<float, 3>> pinnedAt;
+  for (const glm::vec3& p : options.userProbes) pinnedAt.insert({p.x, p.y, p.z});
   for (size_t i = 0; i < candidates.size(); ++i) {
     const Outcome& o = outcomes[i];
     if (!o.kept) {
       ++placement.rejected;
       continue;
     }
+    if (pinnedAt.count({o.position.x, o.position.y, o.position.z})) continue;
     ProbeKind kind = candidates[i].level == 0 ? ProbeKind::Grid : ProbeKind::Refined;
     if (o.moved) {
       kind = ProbeKind::Moved;
