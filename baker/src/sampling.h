@@ -9,6 +9,7 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/transport.h"
 
 namespace afterglow::baker::sampling {
@@ -204,19 +205,8 @@ struct Frame {
   glm::vec3 toWorld(glm::vec3 v) const { return t * v.x + b * v.y + n * v.z; }
 };
 
-// Real SH basis, bands 0..2, in world axes (x, y, z) of a unit direction, in the usual order
-// Y00, Y1-1 (y), Y10 (z), Y11 (x), Y2-2 (xy), Y2-1 (yz), Y20, Y21 (xz), Y22. With this basis a
-// constant radiance L projects to L·2√π on Y00 (runtime::constantSkySh).
-inline void shBasis(glm::vec3 d, float out[runtime::kShCount]) {
-  out[0] = 0.282094791773878f;
-  out[1] = 0.488602511902920f * d.y;
-  out[2] = 0.488602511902920f * d.z;
-  out[3] = 0.488602511902920f * d.x;
-  out[4] = 1.092548430592079f * d.x * d.y;
-  out[5] = 1.092548430592079f * d.y * d.z;
-  out[6] = 0.315391565252520f * (3.0f * d.z * d.z - 1.0f);
-  out[7] = 1.092548430592079f * d.x * d.z;
-  out[8] = 0.546274215296040f * (d.x * d.x - d.y * d.y);
-}
+// Real SH basis, bands 0..2, in world axes: the runtime's one definition (runtime::shBasis,
+// afterglow/runtime/probe_sh.h), shared with the light probes.
+using runtime::shBasis;
 
 }  // namespace afterglow::baker::sampling
