@@ -13,37 +13,12 @@
 #include <string>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
-
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/render.h"
 #include "bench_common.h"
 
 namespace afterglow::bench {
 namespace {
-
-struct Picture {
-  int width = 0, height = 0;
-  std::vector<glm::vec3> rgb;  // row 0 at the top
-};
-
-Result<Picture> readPicture(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) return Status::error(path + ": cannot read (" + OIIO::geterror() + ")");
-  const OIIO::ImageSpec spec = in->spec();
-  if (spec.nchannels < 3) return Status::error(path + ": fewer than 3 channels");
-  std::vector<float> all(size_t(spec.width) * size_t(spec.height) * size_t(spec.nchannels));
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
-    return Status::error(path + ": " + in->geterror());
-  Picture p;
-  p.width = spec.width;
-  p.height = spec.height;
-  p.rgb.resize(size_t(p.width) * size_t(p.height));
-  for (size_t i = 0; i < p.rgb.size(); ++i)
-    p.rgb[i] = {all[i * size_t(spec.nchannels)], all[i * size_t(spec.nchannels) + 1],
-                all[i * size_t(spec.nchannels) + 2]};
-  return p;
-}
 
 bool parse3(const char* s, glm::vec3* v) {
   return std::sscanf(s, "%f,%f,%f", &v->x, &v->y, &v->z) == 3;
@@ -69,7 +44,7 @@ int benchViews(int argc, char** argv) {
   }
   Result<scenes::Scene> scene = loadBenchScene(scenePath, false);
   if (!scene) return fail(scene.message());
-  Result<Picture> a = readPicture(pathA), b = readPicture(pathB);
+  Result<baker::LightmapImage> a = baker::readLinearImage(pathA), b = baker::readLinearImage(pathB);
   if (!a) return fail(a.message());
   if (!b) return fail(b.message());
   if (a->width != b->width || a->height != b->height)
@@ -111,8 +86,8 @@ int benchViews(int argc, char** argv) {
       Sums& s = sums[m];
       const size_t i = size_t(y) * size_t(w) + size_t(x);
       ++s.pixels;
-      s.a += glm::dvec3(a->rgb[i]);
-      s.b += glm::dvec3(b->rgb[i]);
+      s.a += glm::dvec3(a->pixels[i]);
+      s.b += glm::dvec3(b->pixels[i]);
     }
   std::printf("%-14s %7s %10s %10s %9s   %s\n", "material", "pixels", "A lum", "B lum", "A/B-1",
               "A/B-1 per channel (r g b)");

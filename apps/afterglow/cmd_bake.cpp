@@ -84,11 +84,6 @@ namespace {
 // `--texels-per-unit auto`: about a 512² atlas's worth of texels, whatever the level's scale.
 constexpr double kAutoTexels = 512.0 * 512.0;
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 const std::vector<OptionSpec> kBakeOptions = {
     {"output", 'o'},       {"texels-per-unit"}, {"atlas-size"}, {"uv"},
     {"penumbra-samples"},  {"filter-passes"},

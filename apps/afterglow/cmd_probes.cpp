@@ -63,11 +63,6 @@ const char kProbesHelp[] =
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 int runPlace(int argc, char** argv, int first) {
   auto usage = [](const std::string& message) {
     printError("probes place: " + message + " (see afterglow probes --help)");

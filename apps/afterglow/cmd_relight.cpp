@@ -63,7 +63,6 @@ const char kRelightHelp[] =
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 const std::vector<OptionSpec> kRelightOptions = {
     {"output", 'o'}, {"light"},   {"intensity"},          {"bounce"},
@@ -221,7 +220,7 @@ int runRelight(int argc, char** argv, int first) {
     printError(error);
     return kExitBadInput;
   }
-  const double loadSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  const double loadSeconds = secondsSince(t0);
   if (interrupted()) return interruptedExit();
 
   Result<std::string> gltfText = readFile((in / "scene.gltf").string());

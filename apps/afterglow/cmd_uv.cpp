@@ -49,11 +49,6 @@ const char kUvHelp[] =
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 // "2 × 4096x4096, 512x512": atlas sizes grouped, in order of first appearance.
 std::string atlasSummary(const std::vector<uv::AtlasMetrics>& atlases) {
   std::vector<std::pair<std::pair<int, int>, int>> groups;

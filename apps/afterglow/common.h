@@ -1,6 +1,7 @@
 // Pieces shared by the afterglow subcommands: loading SCENE arguments, errors, Ctrl-C.
 #pragma once
 
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,9 @@ bool parseVec3(const std::string& text, glm::vec3* out);
 
 // Prints "afterglow: <message>" to stderr.
 void printError(const std::string& message);
+// Seconds since t (the commands' stage timings).
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t);
 // Whether s ends in suffix (output file extensions).
 bool endsWith(const std::string& s, const std::string& suffix);
 

@@ -24,27 +24,6 @@ namespace afterglow::baker {
 
 namespace {
 
-Result<LightmapImage> readExr(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) return Status::error(path + ": cannot read the lightmap (" + OIIO::geterror() + ")");
-  const OIIO::ImageSpec spec = in->spec();
-  LightmapImage image;
-  image.width = spec.width;
-  image.height = spec.height;
-  const int channels = spec.nchannels;
-  if (image.width <= 0 || image.height <= 0 || channels < 1)
-    return Status::error(path + ": empty lightmap");
-  std::vector<float> data(size_t(image.width) * size_t(image.height) * size_t(channels));
-  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, data.data()))
-    return Status::error(path + ": cannot decode the lightmap (" + in->geterror() + ")");
-  image.pixels.resize(size_t(image.width) * size_t(image.height));
-  for (size_t i = 0; i < image.pixels.size(); ++i) {
-    const float* p = &data[i * size_t(channels)];
-    image.pixels[i] = channels >= 3 ? glm::vec3(p[0], p[1], p[2]) : glm::vec3(p[0]);
-  }
-  return image;
-}
-
 // Bilinear between texel centres, clamped at the edges (the bake dilated into the padding).
 glm::vec3 fetch(const LightmapImage& lm, glm::vec2 uv) {
   const float x = uv.x * float(lm.width) - 0.5f, y = uv.y * float(lm.height) - 0.5f;
@@ -163,6 +142,27 @@ std::string resolveSkyImage(const std::string& recorded, const fs::path& reportD
 
 }  // namespace
 
+Result<LightmapImage> readLinearImage(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return Status::error(path + ": cannot read the lightmap (" + OIIO::geterror() + ")");
+  const OIIO::ImageSpec spec = in->spec();
+  LightmapImage image;
+  image.width = spec.width;
+  image.height = spec.height;
+  const int channels = spec.nchannels;
+  if (image.width <= 0 || image.height <= 0 || channels < 1)
+    return Status::error(path + ": empty lightmap");
+  std::vector<float> data(size_t(image.width) * size_t(image.height) * size_t(channels));
+  if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, data.data()))
+    return Status::error(path + ": cannot decode the lightmap (" + in->geterror() + ")");
+  image.pixels.resize(size_t(image.width) * size_t(image.height));
+  for (size_t i = 0; i < image.pixels.size(); ++i) {
+    const float* p = &data[i * size_t(channels)];
+    image.pixels[i] = channels >= 3 ? glm::vec3(p[0], p[1], p[2]) : glm::vec3(p[0]);
+  }
+  return image;
+}
+
 Ray cameraRay(const View& view, int width, int height, float x, float y) {
   return PinholeCamera(view, width, height).ray(x, y);
 }
@@ -232,7 +232,7 @@ Result<std::vector<LightmapImage>> loadBakedLightmaps(const std::string& gltfPat
       images.emplace_back();
       continue;
     }
-    Result<LightmapImage> img = readExr((dir / f).string());
+    Result<LightmapImage> img = readLinearImage((dir / f).string());
     if (!img) return img.status();
     images.push_back(std::move(img.value()));
   }

@@ -54,6 +54,10 @@ struct LightmapImage {
   std::vector<glm::vec3> pixels;
 };
 
+// A linear image (a lightmap EXR, or a rendered view) as RGB, row 0 first; one channel is read
+// as grey. Errors name the file.
+Result<LightmapImage> readLinearImage(const std::string& path);
+
 // Loads the lightmaps `afterglow bake` attached to a glTF: the EXR files listed in the
 // document's extras.afterglow.lightmaps (falling back to every MOZ_lightmap extension's
 // extras.afterglow.exr), indexed by atlas. Errors name the file.
