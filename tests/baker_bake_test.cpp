@@ -24,26 +24,11 @@
 #include "../baker/src/lightmap_post.h"
 #include "afterglow/runtime/transport.h"
 #include "../baker/src/sky_image.h"
+#include "bake_fixtures.h"
 #include "test_util.h"
 
 namespace afterglow::baker {
 namespace {
-
-BakeOptions draftOptions() {
-  BakeOptions o;
-  o.links.texelRays = 32;
-  o.links.clusterRays = 128;
-  o.direct.lightSamples = 4;
-  o.direct.emissiveSamples = 16;
-  return o;
-}
-
-void unwrapAt(scenes::Scene& scene, float texelsPerUnit) {
-  uv::UnwrapOptions u;
-  u.pack.texelsPerUnit = texelsPerUnit;
-  Result<uv::UnwrapResult> r = uv::unwrap(scene, u);
-  ASSERT_TRUE(r) << r.message();
-}
 
 // The Cornell box lit by a directional light through its open side, with the ceiling lamp
 // switched off, so every texel's light comes from that one light.
@@ -59,12 +44,6 @@ scenes::Scene sunlitCornell(float intensity, float bounceIntensity) {
   sun.bounceIntensity = bounceIntensity;
   scene.lights.push_back(sun);
   return scene;
-}
-
-BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
-  Result<BakeResult> r = bake(scene, options);
-  EXPECT_TRUE(r) << r.message();
-  return r ? std::move(r.value()) : BakeResult{};
 }
 
 class WhiteFurnace : public ::testing::TestWithParam<float> {};
@@ -117,36 +96,6 @@ TEST_P(WhiteFurnace, EveryValidTexelIsLeOverOneMinusAlbedo) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Albedo, WhiteFurnace, ::testing::Values(0.5f, 0.9f));
-
-// The white furnace as a level: the procedural box written through the exporter, its one
-// material's KHR_materials_specular put into the JSON by hand (when `specular` is not null),
-// loaded back from the file and unwrapped coarsely.
-scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohmann::json& specular) {
-  scenes::FurnaceOptions f;
-  f.albedo = glm::vec3(baseColor);
-  f.emission = glm::vec3(1.0f);
-  const std::string path = test::tempDir("furnace_level_" + name) + "/furnace.gltf";
-  Status saved = scenes::saveGltf(scenes::makeFurnaceBox(f), path);
-  EXPECT_TRUE(saved) << saved.message();
-  nlohmann::json doc = nlohmann::json::parse(test::slurp(path));
-  EXPECT_EQ(doc["materials"].size(), 1u);
-  if (!specular.is_null()) {
-    doc["materials"][0]["extensions"]["KHR_materials_specular"] = specular;
-    doc["extensionsUsed"].push_back("KHR_materials_specular");
-  }
-  {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out << doc.dump(1);
-  }
-  Result<scenes::Scene> loaded = scenes::loadGltf(path);
-  EXPECT_TRUE(loaded) << loaded.message();
-  if (!loaded) return {};
-  scenes::Scene scene = std::move(loaded.value());
-  for (const std::string& w : scene.warnings) ADD_FAILURE() << "warning: " << w;
-  EXPECT_EQ(scene.materials.size(), 1u);
-  unwrapAt(scene, 4.0f);
-  return scene;
-}
 
 // Every valid texel of a bake, per channel.
 template <class F>

@@ -89,6 +89,16 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   if (cancelled()) return Status::error("cancelled");
   if (!st) return st;
   record("direct", t0);
+
+  if (!options.probes.positions.empty()) {
+    t0 = Clock::now();
+    st = computeProbeTransfer(scene, tracer, result.texels, result.clusters, far,
+                              options.links.farDistance, options.probes, options.probeOptions, tr,
+                              progress);
+    if (cancelled()) return Status::error("cancelled");
+    if (!st) return st;
+    record("probes", t0);
+  }
   result.raysTraced = tracer.raysTraced();
   result.raysIntersected = tracer.raysTraced(RayTracer::Query::Intersect);
   result.raysOccluded = tracer.raysTraced(RayTracer::Query::Occluded);
@@ -109,6 +119,8 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
     solver.setParallelFor(blockRanges());
     solver.solve(options.solve);
     solver.gatherTexels(result.texelDirect, result.texelIndirect);
+    result.probeSh.resize(solver.probeCount());
+    solver.probeRadiance(0, result.probeSh.size(), result.probeSh.data());
   }
   progress.advance();
   progress.end();

@@ -190,6 +190,13 @@ class GatherBatch {
     ray.direction = dir;
   }
 
+  // Queues one ray along a unit direction (the light probes' rays over the whole sphere).
+  void addDirection(glm::vec3 origin, glm::vec3 direction) {
+    Ray& ray = rays_.emplace_back();
+    ray.origin = origin;
+    ray.direction = direction;
+  }
+
   // Traces the rays queued since the last trace(); with `lookup`, also finds the texel each
   // hit lands on (codes()), without, only what summarize() needs.
   void trace(const RayTracer& tracer, const TexelSet& texels, const TexelLookup* lookup) {
@@ -264,6 +271,9 @@ class GatherBatch {
 
   // Per traced ray, a TexelGather hit code.
   const std::vector<uint32_t>& codes() const { return codes_; }
+  // Per traced ray, what it hit, and the ray.
+  const std::vector<Hit>& hits() const { return hits_; }
+  const std::vector<Ray>& rays() const { return rays_; }
 
   Summary summarize(const RayTracer& tracer, size_t first, size_t last, float near = 0.0f) const {
     Summary out;

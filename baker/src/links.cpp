@@ -12,6 +12,7 @@
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/parallel.h"
+#include "far_targets.h"
 #include "gather_rays.h"
 #include "sampling.h"
 
@@ -250,69 +251,6 @@ std::vector<uint8_t> markFilterNeighbours(const RayTracer& tracer, const TexelSe
   return marks;
 }
 
-// Far clusters as link targets: per level and texel, its far cluster (front sides only,
-// numbered from 0 across the levels), per far cluster the squared distance beyond which a hit
-// links it, and what such a hit links: the far cluster's row in transport.farClusters, or, for
-// a far cluster of a single cluster (a small instance, most of them on Sponza), that cluster
-// itself, which reflects the very same light without a far row to mix each bounce or a slot
-// of R to read it from.
-struct FarTargets {
-  std::vector<std::vector<uint32_t>> ofTexel;  // [level][texel]
-  std::vector<float> reach2;
-  std::vector<uint32_t> target;  // a cluster, or clusterCount + its row of farClusters
-
-  // The link target of the coarsest far cluster of texel t that a point at squared distance
-  // d2 sees from far enough, or kNoTexel.
-  uint32_t of(uint32_t t, float d2) const {
-    for (size_t level = ofTexel.size(); level-- > 0;) {
-      const uint32_t f = ofTexel[level][t];
-      if (f != kNoTexel && d2 > reach2[f]) return target[f];
-    }
-    return kNoTexel;
-  }
-  bool empty() const { return reach2.empty(); }
-};
-
-// Numbers the front far clusters level by level, fills transport.farClusters (each the
-// area-weighted mix of the clusters its texels belong to, for those of several clusters) and
-// the targets. A far cluster's radius is the farthest of its texels' corners from its centre.
-FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
-                      const std::vector<Clusters>& levels, float farDistance,
-                      runtime::TransportData& transport) {
-  FarTargets out;
-  transport.farClusters = runtime::SparseMatrix();
-  if (!(farDistance > 0.0f)) return out;
-  std::vector<std::pair<uint32_t, float>> entries;
-  for (const Clusters& far : levels) {
-    std::vector<uint32_t>& ofTexel = out.ofTexel.emplace_back(texels.size(), kNoTexel);
-    for (uint32_t c = 0; c < far.size(); ++c) {
-      if (far.back[c] || far.firstTexel[c] == far.firstTexel[c + 1]) continue;
-      const uint32_t f = uint32_t(out.reach2.size());
-      entries.clear();
-      float radius = 0.0f;
-      bool single = true;
-      for (uint32_t k = far.firstTexel[c]; k < far.firstTexel[c + 1]; ++k) {
-        const uint32_t t = far.memberTexels[k];
-        if (clusters.texelCluster[t] == kNoTexel) continue;  // (every valid texel has one)
-        ofTexel[t] = f;
-        single = single && (entries.empty() || entries[0].first == clusters.texelCluster[t]);
-        entries.emplace_back(clusters.texelCluster[t], texels.area[t]);
-        radius = std::max(radius, glm::length(texels.position[t] - far.position[c]) +
-                                      0.7072f * texels.edge[t]);
-      }
-      const float reach = farDistance * radius;
-      out.reach2.push_back(reach * reach);
-      if (single && !entries.empty()) {
-        out.target.push_back(entries[0].first);
-        continue;
-      }
-      out.target.push_back(clusters.size() + uint32_t(transport.farClusters.rows()));
-      transport.farClusters.appendNormalisedRow(entries);
-    }
-  }
-  return out;
-}
-
 // Gather points that share a far field (LinkOptions::sharedFarSpan): points of one texel in
 // one span × span square of an atlas, on one surface and in sight of each other. In rounds: in
 // every square the first point without a group anchors one, and the square's other points
@@ -402,6 +340,46 @@ FarGroups shareFarFields(const RayTracer& tracer, const TexelSet& texels,
 
 }  // namespace
 
+// Numbers the front far clusters level by level, fills farClusters (each the
+// area-weighted mix of the clusters its texels belong to, for those of several clusters) and
+// the targets. A far cluster's radius is the farthest of its texels' corners from its centre.
+FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
+                      const std::vector<Clusters>& levels, float farDistance,
+                      runtime::SparseMatrix& farClusters) {
+  FarTargets out;
+  farClusters = runtime::SparseMatrix();
+  if (!(farDistance > 0.0f)) return out;
+  std::vector<std::pair<uint32_t, float>> entries;
+  for (const Clusters& far : levels) {
+    std::vector<uint32_t>& ofTexel = out.ofTexel.emplace_back(texels.size(), kNoTexel);
+    for (uint32_t c = 0; c < far.size(); ++c) {
+      if (far.back[c] || far.firstTexel[c] == far.firstTexel[c + 1]) continue;
+      const uint32_t f = uint32_t(out.reach2.size());
+      entries.clear();
+      float radius = 0.0f;
+      bool single = true;
+      for (uint32_t k = far.firstTexel[c]; k < far.firstTexel[c + 1]; ++k) {
+        const uint32_t t = far.memberTexels[k];
+        if (clusters.texelCluster[t] == kNoTexel) continue;  // (every valid texel has one)
+        ofTexel[t] = f;
+        single = single && (entries.empty() || entries[0].first == clusters.texelCluster[t]);
+        entries.emplace_back(clusters.texelCluster[t], texels.area[t]);
+        radius = std::max(radius, glm::length(texels.position[t] - far.position[c]) +
+                                      0.7072f * texels.edge[t]);
+      }
+      const float reach = farDistance * radius;
+      out.reach2.push_back(reach * reach);
+      if (single && !entries.empty()) {
+        out.target.push_back(entries[0].first);
+        continue;
+      }
+      out.target.push_back(clusters.size() + uint32_t(farClusters.rows()));
+      farClusters.appendNormalisedRow(entries);
+    }
+  }
+  return out;
+}
+
 Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const TexelSet& texels,
                     const TexelGather& gather, const Clusters& clusters,
                     const LinkOptions& options, runtime::TransportData& transport,
@@ -437,7 +415,8 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     const uint32_t t = code & TexelGather::kTexelMask;
     return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
   };
-  const FarTargets far = farTargets(texels, clusters, farLevels, options.farDistance, transport);
+  const FarTargets far =
+      farTargets(texels, clusters, farLevels, options.farDistance, transport.farClusters);
   // (Without far clusters there is no far field to share.)
   const FarGroups groups =
       shareFarFields(tracer, texels, gather, far.empty() ? 0 : options.sharedFarSpan);

@@ -1,5 +1,6 @@
 // The reference path tracer (reference.h, path_tracer.h).
 #include "afterglow/baker/reference.h"
+#include "afterglow/runtime/probe_sh.h"
 
 #include <algorithm>
 #include <cmath>
@@ -239,6 +240,84 @@ Result<ReferenceTexels> referenceTexels(const scenes::Scene& scene, const RayTra
       progress.advance();
     }
   }, 4);
+  progress.end();
+  if (progress.cancelled()) return Status::error("cancelled");
+  return out;
+}
+
+Result<ReferencePoints> referenceIrradiance(const scenes::Scene& scene, const RayTracer& tracer,
+                                            const Environment& environment,
+                                            const std::vector<glm::vec3>& points,
+                                            const std::vector<glm::vec3>& normals,
+                                            const ReferenceOptions& options, Progress& progress) {
+  if (options.samples <= 0) return Status::error("reference: samples must be positive");
+  if (points.size() != normals.size())
+    return Status::error("reference: as many normals as points are needed");
+  const size_t count = points.size();
+  ReferencePoints out;
+  out.irradiance.assign(count, glm::vec3(0.0f));
+  out.variance.assign(count, glm::vec3(0.0f));
+  const PathTracer pt(scene, tracer, environment, options.maxDepth);
+  const uint32_t samples = uint32_t(options.samples);
+  progress.begin("reference path tracing", count);
+  parallelForBlocks(count, [&](size_t begin, size_t end, int) {
+    for (size_t i = begin; i < end && !progress.cancelled(); ++i) {
+      const glm::vec3 n = glm::normalize(normals[i]);
+      glm::dvec3 sum(0.0), sq(0.0);
+      for (uint32_t s = 0; s < samples; ++s) {
+        sampling::Rng rng(sampling::Stream::Reference, (uint64_t(1) << 40) | i, s);
+        const glm::vec2 u = sampling::stratified2(rng, s, samples);
+        const PathTracer::Estimate e = pt.irradiance(points[i], n, n, u, rng);
+        const glm::dvec3 v = glm::dvec3(e.direct) + glm::dvec3(e.indirect);
+        sum += v;
+        sq += v * v;
+      }
+      const double m = double(samples);
+      const glm::dvec3 mean = sum / m;
+      out.irradiance[i] = glm::vec3(mean);
+      if (samples > 1) out.variance[i] = glm::vec3(glm::max(sq / m - mean * mean, 0.0) / (m - 1.0));
+      progress.advance();
+    }
+  }, 1);
+  progress.end();
+  if (progress.cancelled()) return Status::error("cancelled");
+  return out;
+}
+
+Result<std::vector<runtime::ShL2>> referenceRadianceSh(const scenes::Scene& scene,
+                                                       const RayTracer& tracer,
+                                                       const Environment& environment,
+                                                       const std::vector<glm::vec3>& points,
+                                                       const ReferenceOptions& options,
+                                                       Progress& progress) {
+  if (options.samples <= 0) return Status::error("reference: samples must be positive");
+  const size_t count = points.size();
+  std::vector<runtime::ShL2> out(count);
+  const PathTracer pt(scene, tracer, environment, options.maxDepth);
+  const uint32_t samples = uint32_t(options.samples);
+  progress.begin("reference path tracing", count);
+  parallelForBlocks(count, [&](size_t begin, size_t end, int) {
+    for (size_t i = begin; i < end && !progress.cancelled(); ++i) {
+      glm::dvec3 sum[runtime::kShCount] = {};
+      for (uint32_t s = 0; s < samples; ++s) {
+        sampling::Rng rng(sampling::Stream::Reference, (uint64_t(2) << 40) | i, s);
+        const glm::vec2 u = sampling::stratified2(rng, s, samples);
+        // Uniform over the sphere: z = 1 − 2u, φ = 2πv (equal areas).
+        const float z = 1.0f - 2.0f * u.x, r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+        const float phi = 2.0f * kPi * u.y;
+        Ray ray;
+        ray.origin = points[i];
+        ray.direction = glm::vec3(r * std::cos(phi), r * std::sin(phi), z);
+        const glm::vec3 radiance = pt.cameraRadiance(ray, rng.next2(), rng);
+        float y[runtime::kShCount];
+        runtime::shBasis(ray.direction, y);
+        for (int k = 0; k < runtime::kShCount; ++k) sum[k] += glm::dvec3(radiance) * double(y[k]);
+      }
+      for (int k = 0; k < runtime::kShCount; ++k)
+        out[i].c[k] = glm::vec3(sum[k] * (4.0 * double(kPi) / double(samples)));
+      progress.advance();
+    }
+  }, 1);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
   return out;

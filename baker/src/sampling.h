@@ -25,6 +25,7 @@ enum class Stream : uint64_t {
   Reference = 5,
   ReferenceView = 6,
   BackDistance = 7,
+  Probes = 8,
 };
 
 // SplitMix64's finaliser: a cheap, well-mixed 64-bit hash.

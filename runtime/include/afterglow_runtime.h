@@ -38,6 +38,7 @@ typedef struct AfterglowUpdateOptions {
   float tolerance;       /* largest relative change that counts as converged (default 1e-3) */
   double time_budget_ms; /* > 0: stop starting passes that would overrun (first pass runs) */
   int from_scratch;      /* nonzero: reset bounced light first (matches a fresh bake) */
+  int probes;            /* nonzero (default): refresh the light probes after the lightmaps */
 } AfterglowUpdateOptions;
 
 typedef struct AfterglowUpdateStats {
@@ -45,6 +46,8 @@ typedef struct AfterglowUpdateStats {
   int converged;       /* 1 when the last pass changed less than the tolerance */
   float change;        /* the last pass's largest relative change (0 when none ran) */
   double milliseconds; /* wall time of the call */
+  int probes;                /* light probes refreshed */
+  double probe_milliseconds; /* of which the probes took */
 } AfterglowUpdateStats;
 
 /* The defaults: max_bounces 0, tolerance 1e-3, no budget, warm start. */
@@ -98,6 +101,24 @@ int afterglow_runtime_read_atlas(const AfterglowRuntime* runtime, int atlas, flo
 /* Per-texel values (texel_count*3 floats). */
 int afterglow_runtime_texel_count(const AfterglowRuntime* runtime);
 int afterglow_runtime_read_texels(const AfterglowRuntime* runtime, float* rgb, size_t float_count);
+
+/* Light probes: radiance SH L2 per probe, 27 floats (9 coefficients × RGB, coefficient-major:
+ * c0.r c0.g c0.b c1.r ...), in the order and normalisation of runtime/probe_sh.h. Reads see the
+ * last published probe update. Functions returning int return 0 for a NULL handle or an invalid
+ * index. */
+int afterglow_runtime_probe_count(const AfterglowRuntime* runtime);
+int afterglow_runtime_probe_position(const AfterglowRuntime* runtime, int probe, float* xyz);
+int afterglow_runtime_probe_sh(const AfterglowRuntime* runtime, int probe, float* sh27);
+/* Tetrahedral interpolation at (x, y, z); *hint (may be NULL) starts the walk and receives the
+ * tetrahedron found. */
+int afterglow_runtime_sample_probes(const AfterglowRuntime* runtime, float x, float y, float z,
+                                    int* hint, float* sh27);
+/* E/π (rgb) for a unit normal from 27 SH floats. */
+void afterglow_runtime_evaluate_irradiance(const float* sh27, float nx, float ny, float nz,
+                                           float* rgb);
+/* Refreshes the probes alone (budget_ms > 0: round robin within the budget); stats may be NULL. */
+int afterglow_runtime_update_probes(AfterglowRuntime* runtime, double budget_ms,
+                                    AfterglowUpdateStats* stats);
 
 #ifdef __cplusplus
 }

@@ -39,6 +39,7 @@ void afterglow_runtime_default_options(AfterglowUpdateOptions* options) {
   options->tolerance = defaults.tolerance;
   options->time_budget_ms = defaults.timeBudgetMs;
   options->from_scratch = defaults.fromScratch ? 1 : 0;
+  options->probes = defaults.probes ? 1 : 0;
 }
 
 AfterglowRuntime* afterglow_runtime_load(const char* path, char* err, size_t err_size) {
@@ -134,6 +135,18 @@ int afterglow_runtime_set_indirect_intensity(AfterglowRuntime* rt, float scale) 
   return rt && rt->runtime->setIndirectIntensity(scale);
 }
 
+namespace {
+void copyStats(const afterglow::runtime::UpdateStats& s, AfterglowUpdateStats* stats) {
+  if (!stats) return;
+  stats->bounces = s.bounces;
+  stats->converged = s.converged ? 1 : 0;
+  stats->change = s.change;
+  stats->milliseconds = s.milliseconds;
+  stats->probes = s.probes;
+  stats->probe_milliseconds = s.probeMilliseconds;
+}
+}  // namespace
+
 int afterglow_runtime_update(AfterglowRuntime* rt, const AfterglowUpdateOptions* options,
                              AfterglowUpdateStats* stats) {
   if (!rt) return 0;
@@ -143,14 +156,58 @@ int afterglow_runtime_update(AfterglowRuntime* rt, const AfterglowUpdateOptions*
     o.tolerance = options->tolerance;
     o.timeBudgetMs = options->time_budget_ms;
     o.fromScratch = options->from_scratch != 0;
+    o.probes = options->probes != 0;
   }
-  const afterglow::runtime::UpdateStats s = rt->runtime->update(o);
-  if (stats) {
-    stats->bounces = s.bounces;
-    stats->converged = s.converged ? 1 : 0;
-    stats->change = s.change;
-    stats->milliseconds = s.milliseconds;
-  }
+  copyStats(rt->runtime->update(o), stats);
+  return 1;
+}
+
+int afterglow_runtime_probe_count(const AfterglowRuntime* rt) {
+  return rt ? rt->runtime->probeCount() : 0;
+}
+
+int afterglow_runtime_probe_position(const AfterglowRuntime* rt, int probe, float* xyz) {
+  if (!rt || !xyz || probe < 0 || probe >= rt->runtime->probeCount()) return 0;
+  const glm::vec3 p = rt->runtime->probePosition(probe);
+  xyz[0] = p.x, xyz[1] = p.y, xyz[2] = p.z;
+  return 1;
+}
+
+namespace {
+void copySh(const afterglow::runtime::ShL2& sh, float* sh27) {
+  for (int i = 0; i < afterglow::runtime::kShCount; ++i)
+    for (int c = 0; c < 3; ++c) sh27[3 * i + c] = sh.c[i][c];
+}
+}  // namespace
+
+int afterglow_runtime_probe_sh(const AfterglowRuntime* rt, int probe, float* sh27) {
+  afterglow::runtime::ShL2 sh;
+  if (!rt || !sh27 || !rt->runtime->probeSh(probe, &sh)) return 0;
+  copySh(sh, sh27);
+  return 1;
+}
+
+int afterglow_runtime_sample_probes(const AfterglowRuntime* rt, float x, float y, float z,
+                                    int* hint, float* sh27) {
+  if (!rt || !sh27) return 0;
+  copySh(rt->runtime->sampleProbes(glm::vec3(x, y, z), hint), sh27);
+  return 1;
+}
+
+void afterglow_runtime_evaluate_irradiance(const float* sh27, float nx, float ny, float nz,
+                                           float* rgb) {
+  if (!sh27 || !rgb) return;
+  afterglow::runtime::ShL2 sh;
+  for (int i = 0; i < afterglow::runtime::kShCount; ++i)
+    sh.c[i] = glm::vec3(sh27[3 * i], sh27[3 * i + 1], sh27[3 * i + 2]);
+  const glm::vec3 e = afterglow::runtime::Runtime::evaluateIrradiance(sh, glm::vec3(nx, ny, nz));
+  rgb[0] = e.x, rgb[1] = e.y, rgb[2] = e.z;
+}
+
+int afterglow_runtime_update_probes(AfterglowRuntime* rt, double budget_ms,
+                                    AfterglowUpdateStats* stats) {
+  if (!rt) return 0;
+  copyStats(rt->runtime->updateProbes(budget_ms), stats);
   return 1;
 }
 

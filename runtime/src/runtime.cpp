@@ -67,7 +67,9 @@ Runtime::Runtime(TransportData data) : data_(std::move(data)) {
     texels_[b].assign(data_.texelCount, glm::vec3(0.0f));
     for (const AtlasLayout& layout : data_.atlases)
       images_[b].emplace_back(size_t(layout.width) * size_t(layout.height), glm::vec3(0.0f));
+    probes_[b].assign(data_.probes.count(), ShL2());
   }
+  probeWork_.assign(data_.probes.count(), ShL2());
 }
 
 Runtime::~Runtime() = default;
@@ -329,8 +331,91 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
     front_ = back;
   }
   lastOutputMs_ = msSince(outputStart);
+  if (options.probes && !probeWork_.empty()) {
+    const Clock::time_point probeStart = Clock::now();
+    stats.probes = int(refreshProbes(0, probeWork_.size()));
+    publishProbes();
+    stats.probeMilliseconds = msSince(probeStart);
+  }
   stats.milliseconds = msSince(start);
   return stats;
+}
+
+// ---- Light probes -----------------------------------------------------------------------------
+
+size_t Runtime::refreshProbes(size_t first, size_t count) {
+  count = std::min(count, probeWork_.size() - std::min(first, probeWork_.size()));
+  if (count > 0) solver_->probeRadiance(first, count, probeWork_.data() + first);
+  return count;
+}
+
+void Runtime::publishProbes() {
+  const int back = 1 - probeFront_;  // written only here, under updateMutex_
+  std::copy(probeWork_.begin(), probeWork_.end(), probes_[back].begin());
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  probeFront_ = back;
+}
+
+UpdateStats Runtime::updateProbes(double budgetMs) {
+  std::lock_guard<std::mutex> updateLock(updateMutex_);
+  const Clock::time_point start = Clock::now();
+  UpdateStats stats;
+  const size_t n = probeWork_.size();
+  if (n == 0) return stats;
+  if (!(budgetMs > 0.0)) {
+    stats.probes = int(refreshProbes(0, n));
+    probeCursor_ = 0;
+  } else {
+    // Blocks of probes until the budget would be overrun (the first block always runs), at
+    // most once round.
+    constexpr size_t kProbeBlock = 256;
+    double lastBlockMs = 0.0;
+    size_t done = 0;
+    while (done < n) {
+      if (done > 0 && msSince(start) + lastBlockMs > budgetMs) break;
+      const Clock::time_point blockStart = Clock::now();
+      const size_t did = refreshProbes(probeCursor_, std::min(kProbeBlock, n - done));
+      lastBlockMs = msSince(blockStart);
+      done += did;
+      probeCursor_ = (probeCursor_ + did) % n;
+    }
+    stats.probes = int(done);
+  }
+  publishProbes();
+  stats.probeMilliseconds = stats.milliseconds = msSince(start);
+  return stats;
+}
+
+int Runtime::probeCount() const { return int(data_.probes.count()); }
+
+glm::vec3 Runtime::probePosition(int probe) const {
+  return probe >= 0 && probe < probeCount() ? data_.probes.mesh.positions[size_t(probe)] : glm::vec3(0.0f);
+}
+
+bool Runtime::probeSh(int probe, ShL2* sh) const {
+  if (probe < 0 || probe >= probeCount() || !sh) return false;
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  *sh = probes_[probeFront_][size_t(probe)];
+  return true;
+}
+
+ShL2 Runtime::sampleProbes(glm::vec3 position, int* hint) const {
+  ShL2 out;
+  if (probeCount() == 0) return out;
+  const ProbeLocation where = locateProbe(data_.probes.mesh, position, hint ? *hint : 0);
+  if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  const std::vector<ShL2>& sh = probes_[probeFront_];
+  for (int k = 0; k < 4; ++k) {
+    if (where.probes[k] < 0 || where.weights[k] == 0.0f) continue;
+    const ShL2& p = sh[size_t(where.probes[k])];
+    for (int i = 0; i < kShCount; ++i) out.c[i] += where.weights[k] * p.c[i];
+  }
+  return out;
+}
+
+glm::vec3 Runtime::evaluateIrradiance(const ShL2& sh, glm::vec3 normal) {
+  return irradianceOverPi(sh, normal);
 }
 
 // ---- Output -----------------------------------------------------------------------------------

@@ -128,45 +128,89 @@ void Solver::reset() {
 }
 
 
-void Solver::gatherRows(const SparseLinks& links, glm::vec4* gathered) {
-  const uint32_t* rowStart = links.rowStart.data();
+namespace {
+
+// Σ link weight × R[target] over one row of links (the hot loop of a bounce).
+inline glm::vec4 linkRow(const SparseLinks& links, size_t row, const glm::vec4* r) {
   const uint32_t* link = links.link.data();
   const uint32_t mask = links.targetMask(), bits = links.targetBits;
-  const float* rowScale = links.rowScale.data();
+  const uint32_t begin = links.rowStart[row], end = links.rowStart[row + 1];
+#ifdef AFTERGLOW_SSE2
+  // Four links at a time (rows are padded to fours: no tail): their weight codes converted
+  // together (through a store: broadcasting them from memory is cheaper than shuffling them out
+  // of a register), their targets cut out with scalar instructions (which run beside the vector
+  // ones), four accumulators (so the adds do not wait on each other), R padded to 16 bytes for
+  // aligned loads. (Prefetching R in software measured slower, and R in half floats no faster
+  // for the precision it loses.)
+  const __m128i bitsV = _mm_cvtsi32_si128(int(bits));
+  alignas(16) float w[4];
+  __m128 a0 = _mm_setzero_ps(), a1 = a0, a2 = a0, a3 = a0;
+  for (uint32_t k = begin; k < end; k += kLinkGroup) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(link + k));
+    _mm_store_ps(w, _mm_cvtepi32_ps(_mm_srl_epi32(v, bitsV)));
+    uint64_t lo, hi;
+    std::memcpy(&lo, link + k, 8);
+    std::memcpy(&hi, link + k + 2, 8);
+    const uint32_t t0 = uint32_t(lo) & mask, t1 = uint32_t(lo >> 32) & mask;
+    const uint32_t t2 = uint32_t(hi) & mask, t3 = uint32_t(hi >> 32) & mask;
+    a0 = _mm_add_ps(a0, _mm_mul_ps(_mm_set1_ps(w[0]), _mm_load_ps(&r[t0].x)));
+    a1 = _mm_add_ps(a1, _mm_mul_ps(_mm_set1_ps(w[1]), _mm_load_ps(&r[t1].x)));
+    a2 = _mm_add_ps(a2, _mm_mul_ps(_mm_set1_ps(w[2]), _mm_load_ps(&r[t2].x)));
+    a3 = _mm_add_ps(a3, _mm_mul_ps(_mm_set1_ps(w[3]), _mm_load_ps(&r[t3].x)));
+  }
+  const __m128 sum = _mm_add_ps(_mm_add_ps(a0, a1), _mm_add_ps(a2, a3));
+  glm::vec4 out;
+  _mm_storeu_ps(&out.x, _mm_mul_ps(sum, _mm_set1_ps(links.rowScale[row])));
+  return out;
+#else
+  glm::vec4 sum(0.0f);
+  for (uint32_t k = begin; k < end; ++k) sum += float(link[k] >> bits) * r[link[k] & mask];
+  return sum * links.rowScale[row];
+#endif
+}
+
+}  // namespace
+
+void Solver::gatherRows(const SparseLinks& links, glm::vec4* gathered) {
   const glm::vec4* r = reflected4_.data();
   forBlocks(links.rows(), [&](size_t first, size_t last) {
-    for (size_t row = first; row < last; ++row) {
-      const uint32_t begin = rowStart[row], end = rowStart[row + 1];
-#ifdef AFTERGLOW_SSE2
-      // The hot loop of a bounce, four links at a time (rows are padded to fours: no tail):
-      // their weight codes converted together (through a store: broadcasting them from memory
-      // is cheaper than shuffling them out of a register), their targets cut out with scalar
-      // instructions (which run beside the vector ones), four accumulators (so the adds do not
-      // wait on each other), R padded to 16 bytes for aligned loads. (Prefetching R in
-      // software measured slower, and R in half floats no faster for the precision it loses.)
-      const __m128i bitsV = _mm_cvtsi32_si128(int(bits));
-      alignas(16) float w[4];
-      __m128 a0 = _mm_setzero_ps(), a1 = a0, a2 = a0, a3 = a0;
-      for (uint32_t k = begin; k < end; k += kLinkGroup) {
-        const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(link + k));
-        _mm_store_ps(w, _mm_cvtepi32_ps(_mm_srl_epi32(v, bitsV)));
-        uint64_t lo, hi;
-        std::memcpy(&lo, link + k, 8);
-        std::memcpy(&hi, link + k + 2, 8);
-        const uint32_t t0 = uint32_t(lo) & mask, t1 = uint32_t(lo >> 32) & mask;
-        const uint32_t t2 = uint32_t(hi) & mask, t3 = uint32_t(hi >> 32) & mask;
-        a0 = _mm_add_ps(a0, _mm_mul_ps(_mm_set1_ps(w[0]), _mm_load_ps(&r[t0].x)));
-        a1 = _mm_add_ps(a1, _mm_mul_ps(_mm_set1_ps(w[1]), _mm_load_ps(&r[t1].x)));
-        a2 = _mm_add_ps(a2, _mm_mul_ps(_mm_set1_ps(w[2]), _mm_load_ps(&r[t2].x)));
-        a3 = _mm_add_ps(a3, _mm_mul_ps(_mm_set1_ps(w[3]), _mm_load_ps(&r[t3].x)));
+    for (size_t row = first; row < last; ++row) gathered[row] = linkRow(links, row, r);
+  });
+}
+
+void Solver::probeRadiance(size_t first, size_t count, ShL2* out) const {
+  const ProbeTransport& probes = data_.probes;
+  const size_t n = probes.count();
+  if (first >= n) return;
+  count = std::min(count, n - first);
+  bool hasSky = false;
+  for (int i = 0; i < kShCount; ++i) hasSky = hasSky || data_.skySh[i] != glm::vec3(0.0f);
+  const uint32_t bins = probes.bins;
+  const float indirect = data_.indirectIntensity;
+  const glm::vec4* r = reflected4_.data();
+  forBlocks(count, [&](size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) {
+      const size_t p = first + k;
+      ShL2 sh;
+      // Bounced light, region by region.
+      for (uint32_t b = 0; b < bins; ++b) {
+        const glm::vec3 w = indirect * glm::vec3(linkRow(probes.links, p * bins + b, r));
+        const float* y = &probes.binSh[size_t(b) * kShCount];
+        for (int i = 0; i < kShCount; ++i) sh.c[i] += y[i] * w;
       }
-      const __m128 sum = _mm_add_ps(_mm_add_ps(a0, a1), _mm_add_ps(a2, a3));
-      _mm_store_ps(&gathered[row].x, _mm_mul_ps(sum, _mm_set1_ps(rowScale[row])));
-#else
-      glm::vec4 sum(0.0f);
-      for (uint32_t k = begin; k < end; ++k) sum += float(link[k] >> bits) * r[link[k] & mask];
-      gathered[row] = sum * rowScale[row];
-#endif
+      for (size_t s = 0; s < data_.sources.size(); ++s) {
+        const std::vector<float>& transfer = data_.sources[s].probeTransfer;
+        const glm::vec3 scale = sourceScale_[s];
+        if (transfer.empty() || scale == glm::vec3(0.0f)) continue;
+        for (int i = 0; i < kShCount; ++i) sh.c[i] += scale * transfer[p * kShCount + size_t(i)];
+      }
+      if (hasSky) {
+        const uint16_t* k2 = &probes.sky[p * kProbeSkyCount];
+        for (int i = 0; i < kShCount; ++i)
+          for (int j = 0; j < kShCount; ++j)
+            sh.c[i] += halfBits(k2[probeSkyIndex(i, j)]) * data_.skySh[j];
+      }
+      out[k] = sh;
     }
   });
 }

@@ -239,10 +239,21 @@ size_t TransportData::memoryBytes() const {
              bytesOf(texelGather) + bytesOf(texelPoint) + bytesOf(texelNeighbours) +
              bytesOf(texelSky) + bytesOf(clusterSky) + bytesOf(clusterMaterial) +
              bytesOf(clusterAlbedoTexture) + bytesOf(clusterEmissionTexture);
-  for (const Source& s : sources) b += bytesOf(s.texelTransfer) + bytesOf(s.clusterTransfer);
+  for (const Source& s : sources)
+    b += bytesOf(s.texelTransfer) + bytesOf(s.clusterTransfer) + bytesOf(s.probeTransfer);
+  b += probeBytes();
   for (const AtlasLayout& a : atlases)
     b += bytesOf(a.texelOfPixel) + bytesOf(a.mixPixel) + bytesOf(a.mixStart) +
          bytesOf(a.mixTexel) + bytesOf(a.mixWeight);
+  return b;
+}
+
+size_t TransportData::probeBytes() const {
+  const ProbeTransport& p = probes;
+  size_t b = bytesOf(p.mesh.positions) + bytesOf(p.mesh.tetrahedra) + bytesOf(p.mesh.neighbours) +
+             bytesOf(p.binSh) + bytesOf(p.links.rowStart) + bytesOf(p.links.link) +
+             bytesOf(p.links.rowScale) + bytesOf(p.sky);
+  for (const Source& s : sources) b += bytesOf(s.probeTransfer);
   return b;
 }
 
@@ -303,10 +314,37 @@ std::string TransportData::validate() const {
   if (!texelSky.empty() && texelSky.size() != texels * kShCount) return "texel sky transfer size";
   if (!clusterSky.empty() && clusterSky.size() != clusters * kShCount)
     return "cluster sky transfer size";
+  // Light probes: the mesh (indices, orientation, neighbours), one row of links per region,
+  // links to clusters and far clusters only, the sky transfer.
+  const size_t probeCount = probes.count();
+  if (probes.links.rowStart.empty()) return "probe links: no row offsets (not even the leading 0)";
+  if (probeCount > 0) {
+    for (size_t i = 0; i < probeCount; ++i)
+      if (!std::isfinite(probes.mesh.positions[i].x) || !std::isfinite(probes.mesh.positions[i].y) ||
+          !std::isfinite(probes.mesh.positions[i].z)) {
+        why << "probes: probe " << i << " has a position that is not finite";
+        return why.str();
+      }
+    if (std::string bad = checkProbeTetrahedra(probes.mesh); !bad.empty()) return "probes: " + bad;
+    if (probes.bins == 0 || probes.bins > 4096) {
+      why << "probes: " << probes.bins << " regions per probe (1 to 4096)";
+      return why.str();
+    }
+    if (probes.binSh.size() != size_t(probes.bins) * kShCount)
+      return "probes: region SH size does not match the regions";
+    if (probes.sky.size() != probeCount * kProbeSkyCount)
+      return "probes: sky transfer size does not match the probes";
+  } else if (!probes.binSh.empty() || !probes.sky.empty() || probes.links.rows() != 0 ||
+             !probes.mesh.tetrahedra.empty()) {
+    return "probes: transfer without probes";
+  }
+  if (!checkLinks(probes.links, probeCount * probes.bins, farBase, "probe links", why))
+    return why.str();
   for (size_t i = 0; i < sources.size(); ++i) {
     const Source& s = sources[i];
     if ((!s.texelTransfer.empty() && s.texelTransfer.size() != texels) ||
-        (!s.clusterTransfer.empty() && s.clusterTransfer.size() != clusters)) {
+        (!s.clusterTransfer.empty() && s.clusterTransfer.size() != clusters) ||
+        (!s.probeTransfer.empty() && s.probeTransfer.size() != probeCount * kShCount)) {
       why << "source " << i << " ('" << s.name << "'): transfer sizes do not match";
       return why.str();
     }

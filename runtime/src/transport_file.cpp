@@ -65,9 +65,11 @@ constexpr const char* kClusterGather = "CGAT";
 constexpr const char* kGatherMaps = "GMAP";
 constexpr const char* kTexelSky = "TSKY";
 constexpr const char* kClusterSky = "CSKY";
+constexpr const char* kProbes = "PROB";
 constexpr const char* kRequired[] = {kInfo,      kAtlases,      kMaterials,   kSources,
                                      kClusters,  kFarClusters,  kSharedFar,   kLinks,
-                                     kClusterGather, kGatherMaps, kTexelSky,  kClusterSky};
+                                     kClusterGather, kGatherMaps, kTexelSky,  kClusterSky,
+                                     kProbes};
 constexpr size_t kSectionCount = sizeof(kRequired) / sizeof(kRequired[0]);
 
 constexpr size_t kEntrySize = 32;    // one section table entry
@@ -193,6 +195,7 @@ const SectionWriter kWriters[] = {
          o.scalar(s.bounceIntensity);
          o.array(s.texelTransfer);
          o.array(s.clusterTransfer);
+         o.array(s.probeTransfer);
        }
      }},
     {kClusters, 0,
@@ -218,6 +221,17 @@ const SectionWriter kWriters[] = {
      }},
     {kTexelSky, 0, [](const TransportData& d, Out& o) { o.array(d.texelSky); }},
     {kClusterSky, 0, [](const TransportData& d, Out& o) { o.array(d.clusterSky); }},
+    {kProbes, 0,
+     [](const TransportData& d, Out& o) {
+       const ProbeTransport& p = d.probes;
+       o.scalar(p.bins);
+       o.array(p.mesh.positions);
+       o.array(p.mesh.tetrahedra);
+       o.array(p.mesh.neighbours);
+       o.array(p.binSh);
+       o.links(p.links);
+       o.array(p.sky);
+     }},
 };
 static_assert(sizeof(kWriters) / sizeof(kWriters[0]) == kSectionCount, "");
 
@@ -234,6 +248,7 @@ uint64_t sectionCount(const TransportData& d, const char* id) {
   if (id == kClusterGather) return rowsOf(d.clusterGather.rowStart);
   if (id == kGatherMaps) return d.texelPoint.size();
   if (id == kTexelSky) return d.texelSky.size();
+  if (id == kProbes) return d.probes.count();
   return d.clusterSky.size();  // kClusterSky
 }
 
@@ -369,7 +384,7 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
     return true;
   }
   if (id == kSources) {
-    if (!in.records(count, 4 + 8 + 20 + 2 * 16, "sources")) return false;
+    if (!in.records(count, 4 + 8 + 20 + 3 * 16, "sources")) return false;
     d.sources.resize(size_t(count));
     for (uint64_t i = 0; i < count; ++i) {
       Source& s = d.sources[size_t(i)];
@@ -384,7 +399,8 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
                        in.fail("unknown kind " + std::to_string(kind))) &&
                       (enabled <= 1 || in.fail("enabled is " + std::to_string(enabled))) &&
                       in.array(s.texelTransfer, "texel transfer") &&
-                      in.array(s.clusterTransfer, "cluster transfer");
+                      in.array(s.clusterTransfer, "cluster transfer") &&
+                      in.array(s.probeTransfer, "probe transfer");
       if (!ok) {
         in.why = "source " + std::to_string(i) + ": " + in.why;
         return false;
@@ -402,6 +418,19 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
     if (count != d.clusterMaterial.size())
       return in.fail("the table says " + std::to_string(count) + " clusters, the section has " +
                      std::to_string(d.clusterMaterial.size()));
+    return true;
+  }
+  if (id == kProbes) {
+    ProbeTransport& p = d.probes;
+    if (!in.scalar(p.bins, "regions per probe") || !in.array(p.mesh.positions, "probe positions") ||
+        !in.array(p.mesh.tetrahedra, "tetrahedra") || !in.array(p.mesh.neighbours, "neighbours") ||
+        !in.array(p.binSh, "region SH") || !in.scalar(p.links.targetBits, "target bits") ||
+        !in.rowStart(p.links.rowStart, "row offsets") || !in.array(p.links.link, "links") ||
+        !in.array(p.links.rowScale, "row scales") || !in.array(p.sky, "probe sky transfer"))
+      return false;
+    if (count != p.count())
+      return in.fail("the table says " + std::to_string(count) + " probes, the section has " +
+                     std::to_string(p.count()));
     return true;
   }
   const std::vector<uint32_t>* rowStart = nullptr;
@@ -453,7 +482,8 @@ const char* sectionOfComplaint(const std::string& why) {
   static const struct {
     const char* prefix;
     const char* id;
-  } kPrefixes[] = {{"links", kLinks},
+  } kPrefixes[] = {{"probe", kProbes},
+                   {"links", kLinks},
                    {"shared far fields", kSharedFar},
                    {"far clusters", kFarClusters},
                    {"cluster gather", kClusterGather},

@@ -27,6 +27,7 @@ struct Shape {
   uint32_t linksPerRow = 12;
   int atlasSides[3][2] = {{16, 12}, {10, 10}, {7, 5}};
   int lightsWithTexelTransfer = 2;
+  bool probes = true;  // four light probes in one tetrahedron, three regions each
 };
 
 // Every field populated, and valid (validate() is empty).
@@ -75,6 +76,8 @@ TransportData makeTransport(const Shape& s, uint64_t seed = 1) {
       for (uint32_t t = 0; t < s.texels; ++t) src.texelTransfer.push_back(rng.unit());
     if (i != 2)
       for (uint32_t c = 0; c < s.clusters; ++c) src.clusterTransfer.push_back(rng.unit());
+    if (s.probes && i != 1)
+      for (uint32_t k = 0; k < 4 * kShCount; ++k) src.probeTransfer.push_back(rng.unit() - 0.5f);
     d.sources.push_back(std::move(src));
   }
 
@@ -147,6 +150,26 @@ TransportData makeTransport(const Shape& s, uint64_t seed = 1) {
     d.texelSky.push_back(floatToHalf(rng.unit() * 2.0f - 0.5f));
   for (uint32_t i = 0; i < s.clusters * kShCount; ++i) d.clusterSky.push_back(floatToHalf(rng.unit()));
 
+  if (s.probes) {
+    ProbeTransport& p = d.probes;
+    p.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    p.mesh.tetrahedra = {{0, 1, 2, 3}};
+    p.mesh.neighbours = {{-1, -1, -1, -1}};
+    p.bins = 3;
+    for (uint32_t k = 0; k < p.bins * kShCount; ++k) p.binSh.push_back(rng.unit() - 0.5f);
+    p.links = SparseLinks(s.clusters + s.farClusters);
+    for (uint32_t r = 0; r < 4 * p.bins; ++r) {
+      targets.clear();
+      weights.clear();
+      for (uint32_t t = rng.below(3); t < s.clusters + s.farClusters; t += 1 + rng.below(9)) {
+        targets.push_back(t);
+        weights.push_back(0.01f + rng.unit());
+      }
+      p.links.appendRow(targets.data(), weights.data(), targets.size());
+    }
+    for (uint32_t k = 0; k < 4 * kProbeSkyCount; ++k) p.sky.push_back(floatToHalf(rng.unit() - 0.5f));
+  }
+
   d.indirectIntensity = 1.5f;
   d.albedoBoost = 1.25f;
   for (int i = 0; i < kShCount; ++i) d.skySh[i] = glm::vec3(0.1f * float(i), -0.2f, 0.3f + float(i));
@@ -194,6 +217,7 @@ void expectEqual(const TransportData& a, const TransportData& b) {
     EXPECT_EQ(x.enabled, y.enabled);
     EXPECT_EQ(x.texelTransfer, y.texelTransfer);
     EXPECT_EQ(x.clusterTransfer, y.clusterTransfer);
+    EXPECT_EQ(x.probeTransfer, y.probeTransfer);
   }
   EXPECT_EQ(a.clusterMaterial, b.clusterMaterial);
   EXPECT_EQ(a.clusterAlbedoTexture, b.clusterAlbedoTexture);
@@ -218,11 +242,23 @@ void expectEqual(const TransportData& a, const TransportData& b) {
   EXPECT_EQ(a.indirectIntensity, b.indirectIntensity);
   EXPECT_EQ(a.albedoBoost, b.albedoBoost);
   for (int i = 0; i < kShCount; ++i) EXPECT_EQ(a.skySh[i], b.skySh[i]) << "sky SH " << i;
+  const ProbeTransport &p = a.probes, &q = b.probes;
+  EXPECT_EQ(p.mesh.positions, q.mesh.positions);
+  EXPECT_EQ(p.mesh.tetrahedra, q.mesh.tetrahedra);
+  EXPECT_EQ(p.mesh.neighbours, q.mesh.neighbours);
+  EXPECT_EQ(p.bins, q.bins);
+  EXPECT_EQ(p.binSh, q.binSh);
+  EXPECT_EQ(p.links.targetBits, q.links.targetBits);
+  EXPECT_EQ(p.links.rowStart, q.links.rowStart);
+  EXPECT_EQ(p.links.link, q.links.link);
+  EXPECT_EQ(p.links.rowScale, q.links.rowScale);
+  EXPECT_EQ(p.sky, q.sky);
 }
 
 bool isEmpty(const TransportData& d) {
   return d.texelCount == 0 && d.clusterCount == 0 && d.atlases.empty() && d.sources.empty() &&
-         d.materials.empty() && d.links.link.empty() && d.texelSky.empty();
+         d.materials.empty() && d.links.link.empty() && d.texelSky.empty() &&
+         d.probes.count() == 0;
 }
 
 // ---- File surgery ----------------------------------------------------------------------------
@@ -337,9 +373,10 @@ TEST(TransportFile, TransportDataHasNoFieldTheFileMisses) {
   // The sizes with libstdc++ on 64-bit when this file format was written. A failure means a
   // field was added: serialise it (transport_file.cpp) and compare it in expectEqual() above.
 #if defined(__GLIBCXX__) && UINTPTR_MAX == 0xffffffffffffffffull
-  EXPECT_EQ(sizeof(TransportData), 832u);
+  EXPECT_EQ(sizeof(TransportData), 1040u);
   EXPECT_EQ(sizeof(AtlasLayout), 128u);
-  EXPECT_EQ(sizeof(Source), 112u);
+  EXPECT_EQ(sizeof(Source), 136u);
+  EXPECT_EQ(sizeof(ProbeTransport), 208u);
   EXPECT_EQ(sizeof(MaterialParams), 56u);
 #else
   GTEST_SKIP() << "sizes recorded for libstdc++ on 64-bit only";
@@ -514,7 +551,7 @@ TEST(TransportFile, SectionTableRules) {
   const TransportData data = makeTransport(Shape());
   const std::vector<uint8_t> bytes = serializeTransport(data);
   const std::vector<Section> sections = split(bytes);
-  ASSERT_EQ(sections.size(), 12u);
+  ASSERT_EQ(sections.size(), 13u);
   // join() rebuilds the writer's layout exactly.
   EXPECT_EQ(join(sections), bytes);
 

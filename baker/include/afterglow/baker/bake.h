@@ -13,6 +13,8 @@
 #include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
+#include "afterglow/runtime/probe_sh.h"
+#include "afterglow/runtime/probe_tetrahedra.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/runtime/transport.h"
 #include "afterglow/scenes/scene.h"
@@ -30,6 +32,10 @@ struct BakeOptions {
   glm::vec3 skyColor{0.0f};          // constant sky radiance, linear RGB
   std::string skyImage;              // equirect HDR image (overrides skyColor when set)
   int dilation = 2;                  // texels: how far each chart is dilated into its padding
+  // Light probes to bake (positions and their tetrahedra, probes::tetrahedralize); none when
+  // empty.
+  runtime::ProbeTetrahedra probes;
+  ProbeOptions probeOptions;
   // Validation: compute every texel with the reference path tracer instead of the precompute
   // and solve (no clusters, links or transport come out).
   bool reference = false;
@@ -58,6 +64,8 @@ struct BakeResult {
   std::vector<glm::vec3> texelDirect;
   std::vector<glm::vec3> texelIndirect;
   std::vector<std::vector<glm::vec3>> lightmaps;  // per atlas, width*height linear E/π, dilated
+  // Per light probe (BakeOptions::probes), its radiance SH from the same solve.
+  std::vector<runtime::ShL2> probeSh;
   std::vector<StageTime> stages;
   uint64_t raysTraced = 0;      // every ray of the bake
   uint64_t raysIntersected = 0; // of which closest-hit queries (gather rays, texel placement)

@@ -20,6 +20,7 @@
 #include "afterglow/baker/texels.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
+#include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/transport.h"
 #include "afterglow/scenes/scene.h"
 
@@ -56,6 +57,31 @@ Result<ReferenceTexels> referenceTexels(const scenes::Scene& scene, const RayTra
                                         const ReferenceOptions& options,
                                         const std::vector<uint32_t>& which = {},
                                         Progress& progress = nullProgress());
+
+// E/π at free points in space for a normal each (what a light probe's irradiance gives there):
+// path-traced radiance over cosine-distributed directions from the point, with the variance of
+// each mean. Seeded from (point index, sample).
+struct ReferencePoints {
+  std::vector<glm::vec3> irradiance;  // E/π, direct and bounced light together
+  std::vector<glm::vec3> variance;    // of the mean, per channel
+};
+Result<ReferencePoints> referenceIrradiance(const scenes::Scene& scene, const RayTracer& tracer,
+                                            const Environment& environment,
+                                            const std::vector<glm::vec3>& points,
+                                            const std::vector<glm::vec3>& normals,
+                                            const ReferenceOptions& options,
+                                            Progress& progress = nullProgress());
+
+// The radiance arriving at free points projected onto SH L2 (what a light probe stores, without
+// any binning or links): path-traced radiance along `samples` stratified directions over the
+// sphere per point (emission plus albedo × one path's E/π at the first hit, as the camera sees
+// a bake). Seeded from (point index, sample).
+Result<std::vector<runtime::ShL2>> referenceRadianceSh(const scenes::Scene& scene,
+                                                       const RayTracer& tracer,
+                                                       const Environment& environment,
+                                                       const std::vector<glm::vec3>& points,
+                                                       const ReferenceOptions& options,
+                                                       Progress& progress = nullProgress());
 
 // How far a bake's texels are from the reference, as errors relative to each texel's own
 // reference value (so a dim corner counts as much as a texel next to a lamp, and a texel 100×

@@ -111,4 +111,31 @@ Status computeDirect(const scenes::Scene& scene, const RayTracer& tracer, const 
                      const Clusters& clusters, const DirectOptions& options,
                      runtime::TransportData& transport, Progress& progress = nullProgress());
 
+struct ProbeOptions {
+  // Rays per probe: raysSide² over the whole sphere, one in each cell of an equal-area
+  // octahedral grid (Clarberg's map), jittered per probe. Bounced light is gathered per region
+  // of binsSide² regions (blocks of cells; raysSide must be a multiple of binsSide): more
+  // regions follow bounced light's direction more closely but make more links.
+  int raysSide = 24;
+  int binsSide = 6;
+  // Emissive surfaces seen by a probe: this many points chosen by area on each emissive
+  // material, combined with the probe's rays that hit them (balance heuristic), so small lamps
+  // and emissive walls are both well sampled.
+  int emitterSamples = 256;
+  // Shadow rays toward a light with a size (the sun's disk, a sphere light).
+  int lightSamples = 16;
+};
+
+// The light probes' transfer (runtime::ProbeTransport; each source's probeTransfer) for the
+// probes of `mesh`, after computeLinks and computeDirect have filled the transport: per probe,
+// rays over the sphere give the sky's transfer, the emissive surfaces seen and, region by
+// region, the links to the clusters (or the far clusters of `farLevels`, as computeLinks picks
+// them with `farDistance`) whose reflected light arrives; shadow rays give each light's.
+// Seeded from (probe, ray): deterministic for any thread count.
+Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
+                            const TexelSet& texels, const Clusters& clusters,
+                            const std::vector<Clusters>& farLevels, float farDistance,
+                            const runtime::ProbeTetrahedra& mesh, const ProbeOptions& options,
+                            runtime::TransportData& transport, Progress& progress = nullProgress());
+
 }  // namespace afterglow::baker

@@ -42,6 +42,8 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/runtime/probe_sh.h"
+#include "afterglow/runtime/probe_tetrahedra.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/runtime/transport.h"
 
@@ -64,6 +66,9 @@ struct UpdateOptions {
   // tolerance and maxBounces the atlases equal the baker's bit for bit. Off (default): start from
   // the last solution, which converges much faster after small changes.
   bool fromScratch = false;
+  // Refresh every light probe from the new solution (after the lightmaps), published with
+  // them. Off: the probes keep their last values; updateProbes() refreshes them on its own.
+  bool probes = true;
 };
 
 struct UpdateStats {
@@ -71,6 +76,8 @@ struct UpdateStats {
   bool converged = false;   // the last pass changed the solution by less than the tolerance
   float change = 0.0f;      // the last pass's largest relative change (0 when no pass ran)
   double milliseconds = 0;  // wall time of the whole call
+  int probes = 0;                // light probes refreshed
+  double probeMilliseconds = 0;  // of which the probes took (their share of the call)
 };
 
 class Runtime {
@@ -166,6 +173,29 @@ class Runtime {
   void readTexels(glm::vec3* texels) const;
   void readTexels(float* rgb) const;  // texelCount()*3 floats
 
+  // ---- Light probes ---------------------------------------------------------------------------
+  // The baked light probes (TransportData::probes), relit with the lightmaps. A probe holds the
+  // radiance arriving at its position as SH L2 (ShL2, probe_sh.h: L_i = ∫ L(ω) Y_i(ω) dω, RGB,
+  // the project's world axes); evaluateIrradiance turns it into E/π for a normal, the lightmaps'
+  // unit (shade a diffuse surface with albedo × that).
+  int probeCount() const;
+  glm::vec3 probePosition(int probe) const;  // (0, 0, 0) for an invalid index
+  // From the last published probe update; false (and *sh untouched) for an invalid index.
+  bool probeSh(int probe, ShL2* sh) const;
+  // The probes' SH at any point: tetrahedral interpolation (barycentric weights of the
+  // tetrahedron holding it, found by walking from *hint, which receives the tetrahedron found:
+  // keep one hint per moving object), and outside the probes' hull the nearest hull face's
+  // (locateProbe). All zero without probes.
+  ShL2 sampleProbes(glm::vec3 position, int* hint = nullptr) const;
+  // E/π for a unit normal from a probe's (or an interpolated) radiance SH.
+  static glm::vec3 evaluateIrradiance(const ShL2& sh, glm::vec3 normal);
+  // Refreshes the probes alone from the current solution (no setting is applied and no bounce
+  // runs: call update() with maxBounces < 0 for that), then publishes them. budgetMs > 0
+  // refreshes blocks of probes until the budget is spent, carrying on where the previous call
+  // stopped (round robin), and publishes what it has; 0 refreshes them all. Serialised with
+  // update().
+  UpdateStats updateProbes(double budgetMs = 0.0);
+
   // The transport, with the settings as of the last update() applied. Only while no update()
   // runs.
   const TransportData& data() const { return data_; }
@@ -220,6 +250,15 @@ class Runtime {
   int front_ = 0;
   std::vector<glm::vec3> texels_[2];
   std::vector<std::vector<glm::vec3>> images_[2];
+  // Light probes: refreshed in probeWork_ (by range, under updateMutex_), published by copying
+  // it into the back buffer and flipping probeFront_ under outputMutex_.
+  std::vector<ShL2> probeWork_;
+  std::vector<ShL2> probes_[2];
+  int probeFront_ = 0;
+  size_t probeCursor_ = 0;  // where the next budgeted updateProbes() starts
+  // Refreshes probes [first, first + count) and returns how many it did.
+  size_t refreshProbes(size_t first, size_t count);
+  void publishProbes();
 };
 
 }  // namespace afterglow::runtime

@@ -28,6 +28,7 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/transport.h"
 
 namespace afterglow::runtime {
@@ -70,6 +71,12 @@ class Solver {
   void directTexels(glm::vec3* direct, bool withSky = true) const;
   void skyTexels(glm::vec3* sky) const;  // S_t alone
   void indirectTexels(glm::vec3* indirect) const;
+
+  // Light probes (TransportData::probes): the radiance SH of probes [first, first + count) from
+  // the current solution, with the texels' bounces (the links read the same R the texels' last
+  // rows gathered), into out[0 .. count). Probes out of range are left out.
+  void probeRadiance(size_t first, size_t count, ShL2* out) const;
+  size_t probeCount() const { return data_.probes.count(); }
 
   const std::vector<glm::vec3>& clusterReflected() const { return reflected_; }
   const std::vector<glm::vec3>& clusterAlbedo() const { return albedo_; }

@@ -18,6 +18,8 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/runtime/probe_tetrahedra.h"
+
 namespace afterglow::runtime {
 
 constexpr int kShCount = 9;               // SH L2 coefficients (bands 0..2)
@@ -131,6 +133,9 @@ struct Source {
   // Unit transfer (E/π per unit source), dense over texels and over clusters.
   std::vector<float> texelTransfer;
   std::vector<float> clusterTransfer;
+  // Light probes: per probe, the radiance SH (kShCount values) this source sends to it
+  // directly, per unit source (see ProbeTransport). Empty without probes.
+  std::vector<float> probeTransfer;
 };
 
 // The reflective and emissive properties the runtime may change, per material.
@@ -165,6 +170,39 @@ void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texel
 // anyway). Round to nearest even; no dependence on F16C.
 uint16_t floatToHalf(float value);
 float halfToFloat(uint16_t half);
+
+// The sky transfer of a probe is a symmetric kShCount × kShCount matrix; its upper triangle
+// (row-major, i <= j) is stored.
+constexpr int kProbeSkyCount = kShCount * (kShCount + 1) / 2;
+constexpr int probeSkyIndex(int i, int j) {
+  return i <= j ? i * kShCount - i * (i - 1) / 2 + (j - i) : probeSkyIndex(j, i);
+}
+
+// Light probes (issue 14): each probe's radiance SH L2 (ShL2 in probe_sh.h: L_i = ∫ L(ω) Y_i(ω)
+// dω) from the same solution as the lightmaps:
+//
+//   L_i(p) = Σ_s scale_s · probeTransfer_s[p][i]                   sources seen directly
+//          + Σ_j K_p[i][j] · skySh_j                                 the sky through the gaps
+//          + indirectIntensity · Σ_b binSh[b][i] · W_{p,b}            bounced light
+//   W_{p,b} = Σ_j links[p·bins + b][j] · R_j                         (R as the lightmaps' rows read)
+//
+// The baker casts each probe's rays over the whole sphere, stratified in `bins` regions of
+// equal solid angle; W_{p,b} is the mean reflected radiance its rays in region b reached
+// (clusters, or far clusters seen from far enough; misses and absorbed rays count as 0), and
+// binSh[b][i] = ∫_b Y_i dω, so bounced light enters as piecewise constant over the regions:
+// one row of ordinary links a region instead of nine SH-weighted links a cluster, and the
+// bounce's own inner loop. Direct light (lights, emissive surfaces) and the sky are projected
+// ray by ray, exactly.
+struct ProbeTransport {
+  ProbeTetrahedra mesh;        // positions, Delaunay tetrahedra, their neighbours
+  uint32_t bins = 0;           // regions per probe (0 without probes)
+  std::vector<float> binSh;    // bins × kShCount: ∫_b Y_i dω
+  SparseLinks links;           // rows: probe × bins + region; targets as TransportData::links
+                               //   (clusters and far clusters, no shared far fields)
+  std::vector<uint16_t> sky;   // probes × kProbeSkyCount half floats: K_p's upper triangle
+
+  size_t count() const { return mesh.positions.size(); }
+};
 
 // How bounced light is gathered (Enlighten's output pixels): at gather points, one per block of
 // up to 2×2 texels on one surface, or one per texel where other geometry is near and bounced
@@ -233,6 +271,9 @@ struct TransportData {
   std::vector<uint16_t> texelSky;
   std::vector<uint16_t> clusterSky;
 
+  // Light probes (empty without): their transfer; the sources' part is in Source::probeTransfer.
+  ProbeTransport probes;
+
   // Bake-level settings (Unity semantics; 1 is physically correct).
   float indirectIntensity = 1.0f;  // scales all bounced light reaching texels
   float albedoBoost = 1.0f;        // >= 1, pushes albedo toward white for bounces
@@ -252,6 +293,8 @@ struct TransportData {
   // Bytes its arrays hold (a Solver's own buffers come on top: a few floats a texel and a
   // cluster).
   size_t memoryBytes() const;
+  // Of which the light probes' (their mesh and transfer, the sources' probe transfer).
+  size_t probeBytes() const;
 };
 
 // texelGather and pointFilter (smoothing only with filterPasses > 0) from texelPoint,

@@ -1,7 +1,7 @@
 // The transport file (OUT/transport.agt): TransportData on disk, written by the bake and loaded
 // by engines. GLM and the standard library only, like the rest of the runtime.
 //
-// Format, version 4. Everything is little-endian; floats are IEEE binary32, halves binary16.
+// Format, version 5. Everything is little-endian; floats are IEEE binary32, halves binary16.
 //
 //   header (40 bytes, at 0)
 //     0  char[8]  magic "AGLOWTR\0"
@@ -25,7 +25,7 @@
 //              8 bytes of padding, then the elements packed: every array's data starts 16-byte
 //              aligned in the file, so it can be memcpy'd in one go (or used in place).
 //
-// Sections of version 4 (all required; any other id is skipped, so a later writer of the same
+// Sections of version 5 (all required; any other id is skipped, so a later writer of the same
 // version may add sections that older readers ignore). "count" is the table's element count,
 // which the reader checks against the payload.
 //   INFO  count 1: u32 texelCount, u32 clusterCount, u32 gatherPointCount, i32 filterPasses,
@@ -35,7 +35,8 @@
 //   MATL  count = materials; per material: string name, vec3 albedo, vec3 emission
 //   SRCS  count = sources; per source: string name, u8 kind (0 light, 1 emissive),
 //         u8 enabled (0/1), u16 0, u32 material, vec3 color, f32 intensity,
-//         f32 bounceIntensity, arrays f32 texelTransfer, f32 clusterTransfer
+//         f32 bounceIntensity, arrays f32 texelTransfer, f32 clusterTransfer,
+//         f32 probeTransfer (probes × 9: the radiance SH the source sends each probe directly)
 //   CLUS  count = clusters: arrays u32 clusterMaterial, vec3 clusterAlbedoTexture,
 //         vec3 clusterEmissionTexture
 //   FARC  count = far clusters: arrays u32 rowStart, u32 column, f32 weight (far cluster ->
@@ -50,6 +51,11 @@
 //         point filter and the texel gather, which the reader rebuilds: buildGatherMaps)
 //   TSKY  count = values: array u16 texelSky (half floats)
 //   CSKY  count = values: array u16 clusterSky (half floats)
+//   PROB  count = light probes (0 when the bake had none): u32 bins (regions per probe),
+//         arrays vec3 positions, ivec4 tetrahedra, ivec4 neighbours, f32 binSh (bins × 9),
+//         then the links as LINK (u32 targetBits, arrays rowStart, link, rowScale; a row per
+//         probe and region, targets are clusters and far clusters), array u16 sky (probes ×
+//         45 half floats: the sky transfer's upper triangle). See runtime::ProbeTransport.
 // (rows = the rowStart array's length minus one.)
 //
 // The reader checks, in this order: magic, version, header and file sizes, checksum, the section
@@ -72,7 +78,7 @@ namespace afterglow::runtime {
 
 // 2: 4-byte links, far clusters, gather map source; 3: shared far fields; 4: link rows padded
 // to fours
-constexpr uint32_t kTransportVersion = 4;
+constexpr uint32_t kTransportVersion = 5;
 constexpr char kTransportMagic[8] = {'A', 'G', 'L', 'O', 'W', 'T', 'R', '\0'};
 constexpr uint32_t kTransportHeaderSize = 40;
 

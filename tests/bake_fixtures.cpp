@@ -1,0 +1,63 @@
+#include "bake_fixtures.h"
+
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "afterglow/scenes/gltf.h"
+#include "afterglow/scenes/procedural.h"
+#include "afterglow/uv/unwrap.h"
+#include "test_util.h"
+
+namespace afterglow::baker {
+
+BakeOptions draftOptions() {
+  BakeOptions o;
+  o.links.texelRays = 32;
+  o.links.clusterRays = 128;
+  o.direct.lightSamples = 4;
+  o.direct.emissiveSamples = 16;
+  return o;
+}
+
+void unwrapAt(scenes::Scene& scene, float texelsPerUnit) {
+  uv::UnwrapOptions u;
+  u.pack.texelsPerUnit = texelsPerUnit;
+  Result<uv::UnwrapResult> r = uv::unwrap(scene, u);
+  ASSERT_TRUE(r) << r.message();
+}
+
+BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
+  Result<BakeResult> r = bake(scene, options);
+  EXPECT_TRUE(r) << r.message();
+  return r ? std::move(r.value()) : BakeResult{};
+}
+
+scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohmann::json& specular) {
+  scenes::FurnaceOptions f;
+  f.albedo = glm::vec3(baseColor);
+  f.emission = glm::vec3(1.0f);
+  const std::string path = test::tempDir("furnace_level_" + name) + "/furnace.gltf";
+  Status saved = scenes::saveGltf(scenes::makeFurnaceBox(f), path);
+  EXPECT_TRUE(saved) << saved.message();
+  nlohmann::json doc = nlohmann::json::parse(test::slurp(path));
+  EXPECT_EQ(doc["materials"].size(), 1u);
+  if (!specular.is_null()) {
+    doc["materials"][0]["extensions"]["KHR_materials_specular"] = specular;
+    doc["extensionsUsed"].push_back("KHR_materials_specular");
+  }
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << doc.dump(1);
+  }
+  Result<scenes::Scene> loaded = scenes::loadGltf(path);
+  EXPECT_TRUE(loaded) << loaded.message();
+  if (!loaded) return {};
+  scenes::Scene scene = std::move(loaded.value());
+  for (const std::string& w : scene.warnings) ADD_FAILURE() << "warning: " << w;
+  EXPECT_EQ(scene.materials.size(), 1u);
+  unwrapAt(scene, 4.0f);
+  return scene;
+}
+
+}  // namespace afterglow::baker

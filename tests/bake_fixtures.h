@@ -1,0 +1,24 @@
+// Scenes and bake settings shared by the bake tests (the lightmaps' and the light probes').
+#pragma once
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "afterglow/baker/bake.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::baker {
+
+// Few rays and samples: tests that need precision raise what they need.
+BakeOptions draftOptions();
+// Lightmap UVs at this many texels per unit (a test failure when unwrapping fails).
+void unwrapAt(scenes::Scene& scene, float texelsPerUnit);
+// The bake's result, or an empty one and a test failure.
+BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options);
+// The white furnace as a level: the procedural box (emission 1, base colour `baseColor`)
+// written through the exporter, its one material's KHR_materials_specular put into the JSON by
+// hand (when `specular` is not null), loaded back from the file and unwrapped at 4 texels/unit.
+scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohmann::json& specular);
+
+}  // namespace afterglow::baker

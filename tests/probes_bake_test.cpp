@@ -1,0 +1,243 @@
+// Light probes baked from the transport (baker::computeProbeTransfer, Solver::probeRadiance)
+// against answers known without the baker: the glTF furnace (Le / (1 − ρ) from every
+// direction), a probe in the open under a constant sky (E/π = L for every normal), one
+// directional light (its clamped cosine's SH), the Cornell box against the reference path
+// tracer at free points, and the runtime's relit probes against a fresh bake's.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "afterglow/baker/bake.h"
+#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/reference.h"
+#include "afterglow/core/parallel.h"
+#include "afterglow/probes/tetrahedralize.h"
+#include "afterglow/runtime/probe_sh.h"
+#include "afterglow/runtime/runtime.h"
+#include "afterglow/scenes/procedural.h"
+#include "afterglow/scenes/gltf.h"
+#include "bake_fixtures.h"
+#include "test_util.h"
+
+namespace afterglow::baker {
+namespace {
+
+const glm::vec3 kAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+
+runtime::ProbeTetrahedra meshOf(const std::vector<glm::vec3>& positions) {
+  Result<runtime::ProbeTetrahedra> mesh = probes::tetrahedralize(positions);
+  EXPECT_TRUE(mesh) << mesh.message();
+  return mesh ? mesh.value() : runtime::ProbeTetrahedra{};
+}
+
+// A 3×3×3 grid of probes filling [-extent, extent]³.
+std::vector<glm::vec3> gridProbes(float extent) {
+  std::vector<glm::vec3> out;
+  for (int z = -1; z <= 1; ++z)
+    for (int y = -1; y <= 1; ++y)
+      for (int x = -1; x <= 1; ++x) out.emplace_back(float(x) * extent, float(y) * extent, float(z) * extent);
+  return out;
+}
+
+// In the glTF furnace (specularFactor 0, so ρ is the base colour) every probe sees Le / (1 − ρ)
+// from every direction: E/π is that for every normal.
+TEST(ProbesBake, FurnaceEveryProbeAndNormalIsLeOverOneMinusRho) {
+  const float rho = 0.5f;
+  const scenes::Scene scene = furnaceLevel("probes", rho, {{"specularFactor", 0.0}});
+  BakeOptions options = draftOptions();
+  options.links.texelRays = 256;
+  options.links.clusterRays = 1024;
+  options.direct.emissiveSamples = 1024;
+  options.solve.tolerance = 1e-6f;
+  options.probes = meshOf(gridProbes(0.3f));
+  const BakeResult r = bakeOrDie(scene, options);
+  ASSERT_EQ(r.probeSh.size(), 27u);
+  const float expected = 1.0f / (1.0f - rho);
+  float worst = 0.0f;
+  for (const runtime::ShL2& sh : r.probeSh)
+    for (const glm::vec3& n : kAxes) {
+      const glm::vec3 e = runtime::irradianceOverPi(sh, n);
+      for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(e[k] / expected - 1.0f));
+    }
+  EXPECT_LT(worst, 0.01f);
+  std::printf("probe furnace rho %.1f: worst relative error %.4f over 27 probes x 6 normals\n", rho,
+              worst);
+}
+
+// A ground plate far below a probe: the probe sees (nearly) the whole sky, whose constant
+// radiance L must come back as E/π = L for every normal above the horizon, and the plate's
+// reflected light below.
+scenes::Scene groundPlate(float albedo) {
+  scenes::Scene scene;
+  scenes::Material m;
+  m.name = "ground";
+  m.baseColorFactor = glm::vec4(albedo, albedo, albedo, 1.0f);
+  m.specularFactor = 0.0f;
+  scene.materials.push_back(m);
+  scenes::Mesh mesh;
+  mesh.name = "plate";
+  scenes::Primitive prim;
+  prim.material = 0;
+  const float h = 2.0f;
+  prim.positions = {{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}};
+  prim.normals.assign(4, glm::vec3(0, 1, 0));
+  prim.indices = {0, 2, 1, 0, 3, 2};
+  mesh.primitives.push_back(prim);
+  scene.meshes.push_back(mesh);
+  scenes::Instance inst;
+  inst.name = "plate";
+  inst.mesh = 0;
+  scene.instances.push_back(inst);
+  return scene;
+}
+
+TEST(ProbesBake, ProbeInTheOpenSeesTheConstantSky) {
+  scenes::Scene scene = groundPlate(0.0f);
+  unwrapAt(scene, 4.0f);
+  BakeOptions options = draftOptions();
+  const glm::vec3 sky(0.3f, 0.5f, 0.9f);
+  options.skyColor = sky;
+  // Probes high above the plate: it covers a sliver of their sphere.
+  std::vector<glm::vec3> positions;
+  for (glm::vec3 p : gridProbes(1.0f)) positions.push_back(p + glm::vec3(0.0f, 1000.0f, 0.0f));
+  options.probes = meshOf(positions);
+  const BakeResult r = bakeOrDie(scene, options);
+  ASSERT_EQ(r.probeSh.size(), positions.size());
+  float worst = 0.0f;
+  for (const runtime::ShL2& sh : r.probeSh)
+    for (const glm::vec3& n : kAxes) {
+      const glm::vec3 e = runtime::irradianceOverPi(sh, n);
+      for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(e[k] / sky[k] - 1.0f));
+    }
+  EXPECT_LT(worst, 1e-3f);
+}
+
+// One directional light and nothing in its way: a probe's SH is the light's E⊥ times the basis
+// at the direction to the light, so E/π is the clamped cosine's L2 series.
+TEST(ProbesBake, DirectionalLightGivesItsClampedCosine) {
+  scenes::Scene scene = groundPlate(0.0f);
+  unwrapAt(scene, 4.0f);
+  scenes::Light sun;
+  sun.name = "sun";
+  sun.type = scenes::LightType::Directional;
+  sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+  sun.intensity = 3.0f;
+  sun.angularDiameter = 0.0f;  // a point on the sky: its SH is the basis at one direction
+  sun.color = glm::vec3(1.0f, 0.8f, 0.6f);
+  scene.lights.push_back(sun);
+  BakeOptions options = draftOptions();
+  std::vector<glm::vec3> positions;
+  for (glm::vec3 p : gridProbes(1.0f)) positions.push_back(p + glm::vec3(0.0f, 2.0f, 0.0f));
+  options.probes = meshOf(positions);
+  const BakeResult r = bakeOrDie(scene, options);
+  ASSERT_EQ(r.probeSh.size(), positions.size());
+  const glm::vec3 toSun = -sun.direction;
+  float y[runtime::kShCount];
+  runtime::shBasis(toSun, y);
+  float worst = 0.0f;
+  for (const runtime::ShL2& sh : r.probeSh)
+    for (int i = 0; i < runtime::kShCount; ++i) {
+      const glm::vec3 expected = sun.color * sun.intensity * y[i];
+      for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(sh.c[i][k] - expected[k]));
+    }
+  EXPECT_LT(worst, 1e-4f * sun.intensity);
+}
+
+// Relative errors over (point, normal) pairs as the accuracy bench measures texels
+// (reference.h, compareToReference): per pair ‖bake − ref‖ / max(‖ref‖, floor) and the signed
+// relative difference of the channel sums, the floor 10% of the mean.
+struct PairErrors {
+  double rmse = 0.0, bias = 0.0;
+};
+PairErrors compare(const std::vector<glm::vec3>& baked, const std::vector<glm::vec3>& ref) {
+  double mean = 0.0;
+  for (const glm::vec3& v : ref) mean += double(v.x + v.y + v.z);
+  mean /= double(ref.size());
+  const double floor = 0.1 * mean;
+  PairErrors e;
+  for (size_t k = 0; k < ref.size(); ++k) {
+    const glm::vec3 d = baked[k] - ref[k];
+    const double scale = std::max(double(glm::length(ref[k])), floor / std::sqrt(3.0));
+    e.rmse += double(glm::dot(d, d)) / (scale * scale);
+    e.bias += double(d.x + d.y + d.z) / std::max(double(ref[k].x + ref[k].y + ref[k].z), floor);
+  }
+  e.rmse = std::sqrt(e.rmse / double(ref.size()));
+  e.bias /= double(ref.size());
+  return e;
+}
+
+// McGuire's Cornell box lit by its ceiling lamp, 20 free points × 6 axis normals. Against the
+// reference path tracer's irradiance the probes carry two errors: the transport's, and SH L2's
+// own (three bands cannot hold a lamp's sharp edge: a normal facing away from the lamp reads
+// 15-20% dark, as in every engine's L2 probes). So the reference's radiance is also projected
+// onto SH L2 at each point: the bake must match that within 3% (RMSE) and 1% (bias), and be no
+// further from the true irradiance than that projection is.
+TEST(ProbesBake, CornellMatchesTheReferenceAtFreePoints) {
+  AG_REQUIRE_SHARED_SCENE(path, "cornell_box_mcguire/CornellBox-Original.gltf");
+  Result<scenes::Scene> loaded = scenes::loadGltf(path);
+  ASSERT_TRUE(loaded) << loaded.message();
+  scenes::Scene scene = std::move(loaded.value());
+  // The lamp lights the room from its front only, as in the lightmaps' accuracy figures (issue
+  // 3): its back, 1 cm below the ceiling, lights a cavity whose light leaves through a slit the
+  // probes' rays rarely find (see the README: with it the probes read about 5% dark).
+  for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
+  unwrapAt(scene, 16.0f);
+  BakeOptions options;  // the default quality
+  // Probes on a grid inside the box, above the tall block.
+  const scenes::Bounds box = scene.bounds();
+  const glm::vec3 size = box.max - box.min;
+  std::vector<glm::vec3> positions;
+  for (int z = 0; z < 4; ++z)
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x)
+        positions.push_back(box.min + size * glm::vec3(0.15f + 0.233f * float(x),
+                                                       0.62f + 0.09f * float(y),
+                                                       0.15f + 0.233f * float(z)));
+  options.probes = meshOf(positions);
+  const BakeResult r = bakeOrDie(scene, options);
+  ASSERT_EQ(r.probeSh.size(), positions.size());
+  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(scene);
+  ASSERT_TRUE(tracer) << tracer.message();
+  std::vector<glm::vec3> points, pointNormals, normals;
+  std::vector<size_t> which;
+  for (size_t i = 0; i < positions.size() && which.size() < 20; i += 3) which.push_back(i);
+  for (size_t i : which) {
+    points.push_back(positions[i]);
+    for (const glm::vec3& n : kAxes) {
+      pointNormals.push_back(positions[i]);
+      normals.push_back(n);
+    }
+  }
+  ReferenceOptions ro;
+  ro.samples = 4096;
+  Result<ReferencePoints> ref = referenceIrradiance(scene, *tracer.value(), {}, pointNormals, normals, ro);
+  ASSERT_TRUE(ref) << ref.message();
+  ro.samples = 1 << 16;
+  Result<std::vector<runtime::ShL2>> refSh = referenceRadianceSh(scene, *tracer.value(), {}, points, ro);
+  ASSERT_TRUE(refSh) << refSh.message();
+  std::vector<glm::vec3> baked, projected;
+  for (size_t k = 0; k < normals.size(); ++k) {
+    baked.push_back(runtime::irradianceOverPi(r.probeSh[which[k / 6]], normals[k]));
+    projected.push_back(runtime::irradianceOverPi(refSh.value()[k / 6], normals[k]));
+  }
+  const PairErrors vsSh = compare(baked, projected);
+  const PairErrors vsIrradiance = compare(baked, ref->irradiance);
+  const PairErrors shItself = compare(projected, ref->irradiance);
+  std::printf("probes, McGuire's Cornell box, %zu points x 6 normals:\n"
+              "  bake vs the reference projected on SH L2: relative RMSE %.2f%%, bias %+.2f%%\n"
+              "  bake vs the reference's irradiance:       relative RMSE %.2f%%, bias %+.2f%%\n"
+              "  SH L2 itself (projected vs irradiance):   relative RMSE %.2f%%, bias %+.2f%%\n",
+              which.size(), 100 * vsSh.rmse, 100 * vsSh.bias, 100 * vsIrradiance.rmse,
+              100 * vsIrradiance.bias, 100 * shItself.rmse, 100 * shItself.bias);
+  EXPECT_LT(vsSh.rmse, 0.03);
+  EXPECT_LT(std::abs(vsSh.bias), 0.01);
+  // Against the irradiance itself the bake is as far off as SH L2 is, and no further.
+  EXPECT_LT(vsIrradiance.rmse, shItself.rmse + 0.01);
+  EXPECT_LT(std::abs(vsIrradiance.bias - shItself.bias), 0.01);
+}
+
+}  // namespace
+}  // namespace afterglow::baker
