@@ -15,6 +15,11 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/uv/unwrap.h"
 #include "afterglow/baker/bake_output.h"
+#include "afterglow/baker/raytracer.h"
+#include "afterglow/probes/placement.h"
+#include "afterglow/probes/probes_file.h"
+#include "afterglow/probes/tetrahedralize.h"
+#include "afterglow/runtime/probe_sh_file.h"
 #include "args.h"
 #include "commands.h"
 #include "common.h"
@@ -32,6 +37,9 @@ const char kBakeHelp[] =
     "  OUT/lightmaps/lightmap<i>.png   tone-mapped sRGB preview\n"
     "  OUT/scene.gltf (+ scene.bin)     the scene with TEXCOORD_1 and MOZ_lightmap materials\n"
     "  OUT/report.json                  counts, rays, time per stage, peak memory, warnings\n"
+    "  OUT/transport.agt                the transport, for the runtime and afterglow relight\n"
+    "  OUT/probes/light_probes.json     light probes: positions, kinds, tetrahedra, settings\n"
+    "  OUT/probes/light_probes_sh.bin   their radiance SH L2, float32 (README: light probes)\n"
     "Before baking it prints the texel count and a memory estimate, and refuses a bake above\n"
     "the memory budget unless --yes is given. Nothing is written when anything fails or the run\n"
     "is interrupted.\n"
@@ -68,6 +76,12 @@ const char kBakeHelp[] =
     "  --single-sided-emission  double-sided emissive materials emit from their front only\n"
     "                           (default: both sides, as glTF says); written on the output's\n"
     "                           materials as extras.afterglow.singleSidedEmission\n"
+    "  --probes auto|none|FILE  light probes: placed automatically (default, as afterglow\n"
+    "                           probes place does), none, or a PROBES.json from probes place\n"
+    "  --probe-spacing M        metres between grid probes for auto (default: from the level)\n"
+    "  --max-probes N           refuse an auto placement of more probes (default 100000)\n"
+    "  --probe-dering W         write the probes' SH deringed with this Hanning window (e.g.\n"
+    "                           4; default 0: as baked)\n"
     "  --reference              compute every texel with the reference path tracer instead\n"
     "                           (slow; for validating bakes: same outputs, no clusters)\n"
     "  --spp N                  paths per texel for --reference (default 1024)\n"
@@ -94,6 +108,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"far-distance"},      {"shared-far-span"},  {"shared-far-points"}, {"dilation"},
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},       {"single-sided-emission", 0, false},
+    {"probes"},            {"probe-spacing"},   {"max-probes"},  {"probe-dering"},
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
 
 // The settings file as `--name=value` arguments, placed before the command line's own so that
@@ -178,6 +193,85 @@ double estimateBytes(const scenes::Scene& scene, size_t texels, size_t atlasPixe
          64.0 * 1024 * 1024;
 }
 
+// The light probes a bake uses, and how they came about.
+struct ProbeSet {
+  probes::ProbesFile file;
+  float spacing = 0.0f;       // of an automatic placement (0 for a file)
+  nlohmann::json summary = nlohmann::json::object();
+};
+
+Result<ProbeSet> placeBakeProbes(const scenes::Scene& scene, float spacing, size_t maxProbes,
+                                 Progress& progress) {
+  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  if (!tracer) return tracer.status();
+  probes::PlacementOptions o;
+  o.spacing = spacing;
+  o.maxProbes = maxProbes;
+  Result<probes::Placement> placed = probes::placeProbes(scene, *tracer.value(), o, progress);
+  if (!placed) return Status::error(scene.sourcePath + ": " + placed.message());
+  Result<runtime::ProbeTetrahedra> mesh = probes::tetrahedralize(placed->positions);
+  if (!mesh) return Status::error(scene.sourcePath + ": " + mesh.message());
+  ProbeSet out;
+  out.file.positions = placed->positions;
+  out.file.kinds = placed->kinds;
+  out.file.names.assign(placed->positions.size(), "");
+  out.file.mesh = std::move(mesh.value());
+  out.spacing = placed->spacing;
+  out.summary = {{"candidates", placed->candidates},
+                 {"placed", placed->positions.size()},
+                 {"rejectedInsideGeometry", placed->rejected},
+                 {"moved", placed->moved},
+                 {"refined", placed->refined},
+                 {"tetrahedra", out.file.mesh.tetrahedra.size()},
+                 {"warnings", placed->warnings}};
+  return out;
+}
+
+Result<ProbeSet> readBakeProbes(const std::string& path) {
+  Result<probes::ProbesFile> file = probes::readProbesFile(path);
+  if (!file) return file.status();
+  ProbeSet out;
+  out.file = std::move(file.value());
+  out.summary = {{"from", path},
+                 {"placed", out.file.positions.size()},
+                 {"tetrahedra", out.file.mesh.tetrahedra.size()}};
+  return out;
+}
+
+// OUT/probes/light_probes.json (the placement's format, with the SH file named) and
+// OUT/probes/light_probes_sh.bin, through the bake's atomic output.
+Status writeProbeOutputs(const std::string& outDir, const ProbeSet& set,
+                         const std::vector<runtime::ShL2>& sh, float dering,
+                         const nlohmann::json& bakeSettings, AtomicOutput& files) {
+  const fs::path dir = fs::path(outDir) / "probes";
+  probes::Placement placement;
+  placement.positions = set.file.positions;
+  placement.kinds = set.file.kinds;
+  nlohmann::json settings = {{"probes", bakeSettings.value("probes", "auto")},
+                             {"spacing", set.spacing},
+                             {"rays", bakeSettings.value("probeRays", 0)},
+                             {"regions", bakeSettings.value("probeRegions", 0)},
+                             {"emitterSamples", bakeSettings.value("probeEmitterSamples", 0)}};
+  nlohmann::json doc = nlohmann::json::parse(
+      probes::probesJson(placement, set.file.names, set.file.mesh, settings.dump(), set.summary.dump()));
+  doc["sh"] = {{"file", "light_probes_sh.bin"},
+               {"format", "afterglow-light-probe-sh"},
+               {"version", runtime::kProbeShVersion},
+               {"basis", "real SH L2, bands 0-2, orthonormal (Y00 = 0.282095), world axes +Y up"},
+               {"stores", "radiance SH L_i = integral of L(w) Y_i(w) dw, RGB; E/pi via the "
+                          "clamped-cosine convolution (runtime/probe_sh.h)"},
+               {"deringWindow", dering}};
+  runtime::ProbeShFile file;
+  file.deringWindow = dering;
+  file.sh = sh;
+  if (dering > 0.0f)
+    for (runtime::ShL2& s : file.sh) s = runtime::deringed(s, dering);
+  const std::vector<uint8_t> bytes = runtime::serializeProbeSh(file);
+  if (Status st = files.write((dir / "light_probes.json").string(), doc.dump() + "\n"); !st) return st;
+  return files.write((dir / "light_probes_sh.bin").string(),
+                     std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
 }  // namespace
 
 int runBake(int argc, char** argv, int first) {
@@ -217,7 +311,8 @@ int runBake(int argc, char** argv, int first) {
     return usage("--quality wants draft, default or high, got '" + quality + "'");
   baker::BakeOptions options = baker::bakePreset(preset);
   int threads = 0, bounces = 0, atlasSize = 0;
-  float budgetGb = 8.0f, texelsPerUnit = 0.0f;
+  float budgetGb = 8.0f, texelsPerUnit = 0.0f, probeSpacing = 0.0f, probeDering = 0.0f;
+  int maxProbes = 100000;
   const std::string density = args.get("texels-per-unit", "auto");
   if (density != "auto" &&
       !args.getFloat("texels-per-unit", 0.0f, 1e-3f, 1e5f, &texelsPerUnit))
@@ -250,8 +345,12 @@ int runBake(int argc, char** argv, int first) {
       !args.getInt("dilation", 2, 0, 64, &options.dilation) ||
       !args.getInt("threads", 0, 0, 1024, &threads) ||
       !args.getInt("spp", 1024, 1, 1 << 24, &options.referenceOptions.samples) ||
-      !args.getFloat("memory-budget", 8.0f, 0.0f, 1e6f, &budgetGb))
+      !args.getFloat("memory-budget", 8.0f, 0.0f, 1e6f, &budgetGb) ||
+      !args.getFloat("probe-spacing", 0.0f, 0.0f, 1e6f, &probeSpacing) ||
+      !args.getInt("max-probes", 100000, 1, 100000000, &maxProbes) ||
+      !args.getFloat("probe-dering", 0.0f, 0.0f, 1e6f, &probeDering))
     return usage(args.error());
+  const std::string probesMode = args.get("probes", "auto");
   if (atlasSize > 0 && texelsPerUnit > 0.0f)
     return usage("give --texels-per-unit or --atlas-size, not both");
   options.solve.maxBounces = bounces;
@@ -338,6 +437,30 @@ int runBake(int argc, char** argv, int first) {
     return kExitBadInput;
   }
 
+  // Light probes: placed (as `probes place` does) or read, before the bake so that a bad probes
+  // file or too many probes stops it before minutes of precompute.
+  ProbeSet probeSet;
+  if (!options.reference && probesMode != "none") {
+    const auto probeStart = Clock::now();
+    Result<ProbeSet> got = probesMode == "auto"
+                               ? placeBakeProbes(scene, probeSpacing, size_t(maxProbes), progress)
+                               : readBakeProbes(probesMode);
+    if (interrupted() || progress.cancelled()) return interruptedExit();
+    if (!got) {
+      printError(got.message());
+      return kExitBadInput;
+    }
+    probeSet = std::move(got.value());
+    options.probes = probeSet.file.mesh;
+    info.extraStages.push_back({"probe placement", secondsSince(probeStart)});
+    if (!quiet)
+      std::printf("probes        %zu (%s), %zu tetrahedra\n", probeSet.file.positions.size(),
+                  probesMode == "auto" ? format("placed, spacing %.3g m", double(probeSet.spacing)).c_str()
+                                       : probesMode.c_str(),
+                  probeSet.file.mesh.tetrahedra.size());
+    std::fflush(stdout);
+  }
+
   Result<baker::BakeResult> baked = baker::bake(scene, options, progress);
   if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!baked) {
@@ -371,7 +494,13 @@ int runBake(int argc, char** argv, int first) {
                              {"reference", options.reference},
                              {"referenceSpp", options.referenceOptions.samples},
                              {"memoryBudgetGb", budgetGb},
-                             {"estimatedMemoryGb", estimateGb}};
+                             {"estimatedMemoryGb", estimateGb},
+                             {"probes", probesMode},
+                             {"probeSpacing", probeSet.spacing},
+                             {"probeDering", probeDering},
+                             {"probeRays", options.probeOptions.raysSide * options.probeOptions.raysSide},
+                             {"probeRegions", options.probeOptions.binsSide * options.probeOptions.binsSide},
+                             {"probeEmitterSamples", options.probeOptions.emitterSamples}};
   info.settingsJson = settings.dump();
 
   AtomicOutput files;
@@ -381,6 +510,15 @@ int runBake(int argc, char** argv, int first) {
   if (!written) {
     printError(written.message());
     return kExitOutput;
+  }
+  if (!baked->probeSh.empty()) {
+    if (Status st = writeProbeOutputs(outDir, probeSet, baked->probeSh, probeDering, settings, files);
+        !st) {
+      printError(st.message());
+      return kExitOutput;
+    }
+    written->push_back((fs::path(outDir) / "probes" / "light_probes.json").string());
+    written->push_back((fs::path(outDir) / "probes" / "light_probes_sh.bin").string());
   }
   if (interrupted()) return interruptedExit();
   if (Status st = files.commit(); !st) {

@@ -37,6 +37,20 @@ Result<UserProbes> readUserProbes(const std::string& path);
 // The same from the file's text (`path` names it in errors).
 Result<UserProbes> parseUserProbes(const std::string& text, const std::string& path);
 
+// A placement read back (`afterglow bake --probes PROBES.json`, `probes sample`): positions,
+// kinds, names and the tetrahedra with their neighbours, checked.
+struct ProbesFile {
+  std::vector<glm::vec3> positions;
+  std::vector<ProbeKind> kinds;     // Grid where the file has none
+  std::vector<std::string> names;   // one per probe ("" when unnamed)
+  runtime::ProbeTetrahedra mesh;    // positions, tetrahedra, neighbours
+};
+// Errors name the file and the object at fault: not a light probes file, a position that is
+// not three finite numbers, an unknown kind, a tetrahedron with an index out of range (or not
+// four integers), neighbours that do not match (runtime::checkProbeTetrahedra).
+Result<ProbesFile> readProbesFile(const std::string& path);
+Result<ProbesFile> parseProbesFile(const std::string& text, const std::string& path);
+
 // The file's text. `settingsJson` and `summaryJson` are JSON objects as text ("{}" for none).
 std::string probesJson(const Placement& placement, const std::vector<std::string>& names,
                        const runtime::ProbeTetrahedra& mesh, const std::string& settingsJson,

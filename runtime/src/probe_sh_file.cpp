@@ -1,0 +1,109 @@
+#include "afterglow/runtime/probe_sh_file.h"
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+namespace afterglow::runtime {
+
+namespace {
+
+constexpr uint32_t kFloatsPerProbe = 3 * kShCount;
+constexpr uint32_t kDeringed = 1u;
+
+void put32(std::vector<uint8_t>& out, size_t at, uint32_t v) {
+  for (int k = 0; k < 4; ++k) out[at + size_t(k)] = uint8_t(v >> (8 * k));
+}
+uint32_t get32(const uint8_t* p) {
+  return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
+void putFloat(std::vector<uint8_t>& out, size_t at, float f) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, 4);
+  put32(out, at, bits);
+}
+float getFloat(const uint8_t* p) {
+  const uint32_t bits = get32(p);
+  float f;
+  std::memcpy(&f, &bits, 4);
+  return f;
+}
+
+}  // namespace
+
+std::vector<uint8_t> serializeProbeSh(const ProbeShFile& file) {
+  std::vector<uint8_t> out(kProbeShHeaderSize + file.sh.size() * kFloatsPerProbe * 4, 0);
+  std::memcpy(out.data(), kProbeShMagic, 8);
+  put32(out, 8, kProbeShVersion);
+  put32(out, 12, uint32_t(file.sh.size()));
+  put32(out, 16, kFloatsPerProbe);
+  put32(out, 20, file.deringWindow > 0.0f ? kDeringed : 0u);
+  putFloat(out, 24, file.deringWindow > 0.0f ? file.deringWindow : 0.0f);
+  size_t at = kProbeShHeaderSize;
+  for (const ShL2& sh : file.sh)
+    for (int i = 0; i < kShCount; ++i)
+      for (int c = 0; c < 3; ++c, at += 4) putFloat(out, at, sh.c[i][c]);
+  return out;
+}
+
+bool parseProbeSh(const uint8_t* bytes, size_t size, ProbeShFile& out, std::string* error) {
+  auto fail = [&](const std::string& why) {
+    if (error) *error = why;
+    out = ProbeShFile();
+    return false;
+  };
+  if (size < kProbeShHeaderSize || std::memcmp(bytes, kProbeShMagic, 8) != 0)
+    return fail(size >= 8 && std::memcmp(bytes, kProbeShMagic, 8) == 0
+                    ? "truncated: " + std::to_string(size) + " bytes, the header alone has 32"
+                    : "not an afterglow light probe SH file");
+  const uint32_t version = get32(bytes + 8), count = get32(bytes + 12);
+  const uint32_t floats = get32(bytes + 16), flags = get32(bytes + 20);
+  if (version != kProbeShVersion)
+    return fail("version " + std::to_string(version) + "; this reader reads version " +
+                std::to_string(kProbeShVersion));
+  if (floats != kFloatsPerProbe)
+    return fail(std::to_string(floats) + " floats per probe, expected " +
+                std::to_string(kFloatsPerProbe));
+  const uint64_t expected = uint64_t(kProbeShHeaderSize) + uint64_t(count) * kFloatsPerProbe * 4;
+  if (uint64_t(size) != expected)
+    return fail(std::to_string(size) + " bytes, " + std::to_string(count) + " probes need " +
+                std::to_string(expected));
+  const float window = getFloat(bytes + 24);
+  if ((flags & ~kDeringed) != 0 || !std::isfinite(window) || window < 0.0f ||
+      ((flags & kDeringed) != 0) != (window > 0.0f))
+    return fail("bad flags or deringing window");
+  ProbeShFile file;
+  file.deringWindow = window;
+  file.sh.resize(count);
+  const uint8_t* p = bytes + kProbeShHeaderSize;
+  for (uint32_t n = 0; n < count; ++n)
+    for (int i = 0; i < kShCount; ++i)
+      for (int c = 0; c < 3; ++c, p += 4) {
+        const float v = getFloat(p);
+        if (!std::isfinite(v))
+          return fail("probe " + std::to_string(n) + ": coefficient " + std::to_string(i) +
+                      " is not finite");
+        file.sh[n].c[i][c] = v;
+      }
+  out = std::move(file);
+  return true;
+}
+
+bool readProbeSh(const std::string& path, ProbeShFile& out, std::string* error) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    if (error) *error = path + ": cannot open";
+    return false;
+  }
+  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                   std::istreambuf_iterator<char>());
+  std::string why;
+  if (!parseProbeSh(bytes.data(), bytes.size(), out, &why)) {
+    if (error) *error = path + ": " + why;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace afterglow::runtime
