@@ -103,7 +103,9 @@ TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
   const std::string out = bakedCornell();
   const std::vector<std::string> files = tree(out);
   const std::vector<std::string> expected = {"lightmaps/lightmap0.exr", "lightmaps/lightmap0.png",
-                                             "report.json", "scene.bin", "scene.gltf", "transport.agt"};
+                                             "probes/light_probes.json",
+                                             "probes/light_probes_sh.bin", "report.json",
+                                             "scene.bin", "scene.gltf", "transport.agt"};
   EXPECT_EQ(files, expected);
 
   const json report = json::parse(slurp(out + "/report.json"));
