@@ -1,5 +1,8 @@
-// libFuzzer target: the light probes' user file (`afterglow probes place --add FILE.json`). Any
-// input must give probes or an error, never a crash, and every probe it gives must be finite.
+// libFuzzer target: the light probes' files. The same bytes go to the user's probes file
+// (`afterglow probes place --add FILE.json`), a placement (`afterglow bake --probes
+// PROBES.json`, checked tetrahedra) and the baked SH file (OUT/probes/light_probes_sh.bin). Any
+// input must give a result or an error, never a crash, and every result must hold what its
+// reader promises: finite positions and SH, tetrahedra that pass runtime::checkProbeTetrahedra.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -7,14 +10,39 @@
 #include <string>
 
 #include "afterglow/probes/probes_file.h"
+#include "afterglow/runtime/probe_sh_file.h"
+
+namespace {
+
+bool finite(glm::vec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
+
+}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace afterglow;
   const std::string text(reinterpret_cast<const char*>(data), size);
-  afterglow::Result<afterglow::probes::UserProbes> probes =
-      afterglow::probes::parseUserProbes(text, "fuzz.json");
-  if (!probes) return 0;
-  if (probes->names.size() != probes->positions.size()) std::abort();
-  for (const glm::vec3& p : probes->positions)
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) std::abort();
+  if (Result<probes::UserProbes> user = probes::parseUserProbes(text, "fuzz.json")) {
+    if (user->names.size() != user->positions.size()) std::abort();
+    for (const glm::vec3& p : user->positions)
+      if (!finite(p)) std::abort();
+  }
+  if (Result<probes::ProbesFile> file = probes::parseProbesFile(text, "fuzz.json")) {
+    const size_t n = file->positions.size();
+    if (file->kinds.size() != n || file->names.size() != n || file->mesh.positions.size() != n)
+      std::abort();
+    if (!runtime::checkProbeTetrahedra(file->mesh).empty()) std::abort();
+    for (const glm::vec3& p : file->positions)
+      if (!finite(p)) std::abort();
+  }
+  runtime::ProbeShFile sh;
+  std::string error;
+  if (runtime::parseProbeSh(data, size, sh, &error)) {
+    if (size != runtime::kProbeShHeaderSize + sh.sh.size() * 27 * 4) std::abort();
+    for (const runtime::ShL2& s : sh.sh)
+      for (const glm::vec3& c : s.c)
+        if (!finite(c)) std::abort();
+  } else if (error.empty() || error.find('\n') != std::string::npos) {
+    std::abort();
+  }
   return 0;
 }

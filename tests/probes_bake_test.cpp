@@ -14,6 +14,7 @@
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/parallel.h"
+#include <memory>
 #include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/runtime.h"
@@ -237,6 +238,55 @@ TEST(ProbesBake, CornellMatchesTheReferenceAtFreePoints) {
   // Against the irradiance itself the bake is as far off as SH L2 is, and no further.
   EXPECT_LT(vsIrradiance.rmse, shItself.rmse + 0.01);
   EXPECT_LT(std::abs(vsIrradiance.bias - shItself.bias), 0.01);
+}
+
+// The probes come out the same for any thread count, and the runtime's sampling at a probe's
+// own position returns that probe, relit from the transport exactly as baked.
+TEST(ProbesBake, DeterministicAndSampledAtTheProbesThemselves) {
+  scenes::Scene scene = scenes::makeCornellBox();
+  unwrapAt(scene, 16.0f);
+  BakeOptions options = draftOptions();
+  const scenes::Bounds box = scene.bounds();
+  std::vector<glm::vec3> positions;
+  for (int z = 0; z < 3; ++z)
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 3; ++x)
+        positions.push_back(box.min + (box.max - box.min) *
+                                          glm::vec3(0.2f + 0.3f * float(x), 0.65f + 0.1f * float(y),
+                                                    0.2f + 0.3f * float(z)));
+  options.probes = meshOf(positions);
+  setThreadCount(1);
+  const BakeResult one = bakeOrDie(scene, options);
+  setThreadCount(2);
+  const BakeResult two = bakeOrDie(scene, options);
+  setThreadCount(0);
+  ASSERT_EQ(one.probeSh.size(), positions.size());
+  ASSERT_EQ(two.probeSh.size(), positions.size());
+  for (size_t p = 0; p < positions.size(); ++p)
+    for (int i = 0; i < runtime::kShCount; ++i)
+      ASSERT_EQ(one.probeSh[p].c[i], two.probeSh[p].c[i]) << "probe " << p << " coefficient " << i;
+
+  std::string error;
+  std::unique_ptr<runtime::Runtime> rt = runtime::Runtime::fromData(one.transport, &error);
+  ASSERT_TRUE(rt) << error;
+  runtime::UpdateOptions update;
+  update.fromScratch = true;
+  const runtime::UpdateStats stats = rt->update(update);
+  EXPECT_EQ(stats.probes, int(positions.size()));
+  ASSERT_EQ(rt->probeCount(), int(positions.size()));
+  int hint = 0;
+  for (size_t p = 0; p < positions.size(); ++p) {
+    EXPECT_EQ(rt->probePosition(int(p)), positions[p]);
+    runtime::ShL2 own;
+    ASSERT_TRUE(rt->probeSh(int(p), &own));
+    const runtime::ShL2 sampled = rt->sampleProbes(positions[p], &hint);
+    for (int i = 0; i < runtime::kShCount; ++i) {
+      EXPECT_EQ(own.c[i], one.probeSh[p].c[i]) << "probe " << p;
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(sampled.c[i][k], own.c[i][k], 1e-5f * (1.0f + std::abs(own.c[0][k])))
+            << "probe " << p << " coefficient " << i;
+    }
+  }
 }
 
 }  // namespace

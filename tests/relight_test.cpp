@@ -1,6 +1,7 @@
 // The relighting runtime against the baker: a bake relit through runtime::Runtime with changed
 // light colour, intensity, bounce intensity, a light switched off, albedo, emission or sky
-// equals a fresh bake of the scene with the same change (max relative difference <= 1e-4),
+// equals a fresh bake of the scene with the same change (max relative difference <= 1e-4, the
+// lightmaps and, on the Cornell box, the light probes),
 // on the Cornell box and on Sponza-sun; and relighting is linear in the lights.
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "afterglow/baker/bake.h"
+#include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/uv/unwrap.h"
@@ -99,6 +101,29 @@ void expectRelitEqualsFresh(const char* what, const BakeResult& base,
               changed);
   EXPECT_LE(diff, 1e-4) << what;
   EXPECT_GT(changed, 0.01) << what;
+  // The light probes alike: every SH coefficient relative to the probes' mean DC term.
+  ASSERT_EQ(size_t(rt->probeCount()), fresh.probeSh.size()) << what;
+  if (fresh.probeSh.empty()) return;
+  double mean = 0.0;
+  for (const runtime::ShL2& sh : fresh.probeSh) mean += double(glm::length(sh.c[0]));
+  mean /= double(fresh.probeSh.size());
+  const double floor = std::max(1e-3 * mean, 1e-30);
+  double probeDiff = 0.0, probeChanged = 0.0;
+  for (size_t p = 0; p < fresh.probeSh.size(); ++p) {
+    runtime::ShL2 relitSh;
+    ASSERT_TRUE(rt->probeSh(int(p), &relitSh));
+    for (int i = 0; i < runtime::kShCount; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const double want = double(fresh.probeSh[p].c[i][k]);
+        const double scale = std::max(std::abs(want), floor);
+        probeDiff = std::max(probeDiff, std::abs(double(relitSh.c[i][k]) - want) / scale);
+        probeChanged = std::max(probeChanged, std::abs(double(base.probeSh[p].c[i][k]) - want) / scale);
+      }
+  }
+  std::printf("%-34s probes: max relative difference %.2e (the change itself: %.2f)\n", what,
+              probeDiff, probeChanged);
+  EXPECT_LE(probeDiff, 1e-4) << what;
+  EXPECT_GT(probeChanged, 0.01) << what;
 }
 
 int materialNamed(const scenes::Scene& scene, const std::string& name) {
@@ -121,7 +146,19 @@ TEST(Relight, CornellRelitEqualsAFreshBake) {
   lamp.intensity = 0.8f;
   lamp.color = glm::vec3(1.0f, 0.8f, 0.6f);
   scene.lights.push_back(lamp);
-  const BakeOptions options = fastOptions();
+  BakeOptions options = fastOptions();
+  // Light probes on a grid in the room, relit with the lightmaps.
+  const scenes::Bounds box = scene.bounds();
+  std::vector<glm::vec3> probes;
+  for (int z = 0; z < 3; ++z)
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 3; ++x)
+        probes.push_back(box.min + (box.max - box.min) *
+                                       glm::vec3(0.2f + 0.3f * float(x), 0.6f + 0.12f * float(y),
+                                                 0.2f + 0.3f * float(z)));
+  Result<runtime::ProbeTetrahedra> mesh = probes::tetrahedralize(probes);
+  ASSERT_TRUE(mesh) << mesh.message();
+  options.probes = mesh.value();
   const BakeResult base = bakeOrDie(scene, options);
   ASSERT_FALSE(base.lightmaps.empty());
 

@@ -508,16 +508,6 @@ float fittingSpacing(const scenes::Scene& scene, const PlacementOptions& options
 
 }  // namespace
 
-const char* probeKindName(ProbeKind kind) {
-  switch (kind) {
-    case ProbeKind::Grid: return "grid";
-    case ProbeKind::Refined: return "refined";
-    case ProbeKind::Moved: return "moved";
-    case ProbeKind::Pinned: return "pinned";
-  }
-  return "unknown";
-}
-
 float autoSpacing(const scenes::Scene& scene) {
   const scenes::Bounds b = staticBounds(scene);
   if (b.empty()) return 1.0f;

@@ -1,5 +1,6 @@
-// The user's probes file (`afterglow probes place --add`), apart from the rest of the library so
-// that the fuzzer links it alone.
+// Reading the light probes' files (the user's probes for `afterglow probes place --add`, a
+// placement for `afterglow bake --probes`), apart from the rest of the library so that the
+// fuzzer links it alone.
 #include <cmath>
 #include <cstdlib>
 
@@ -11,6 +12,16 @@
 namespace afterglow::probes {
 
 using json = nlohmann::json;
+
+const char* probeKindName(ProbeKind kind) {
+  switch (kind) {
+    case ProbeKind::Grid: return "grid";
+    case ProbeKind::Refined: return "refined";
+    case ProbeKind::Moved: return "moved";
+    case ProbeKind::Pinned: return "pinned";
+  }
+  return "unknown";
+}
 
 Result<UserProbes> parseUserProbes(const std::string& text, const std::string& path) {
   const json doc = json::parse(text, nullptr, false);

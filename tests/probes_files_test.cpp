@@ -1,0 +1,160 @@
+// The light probes' files read back: a placement (`afterglow bake --probes PROBES.json`) and the
+// baked SH file round trip; bad placements (NaN, a tetrahedron index out of range, neighbours
+// that do not match) and bad SH files are refused with one line naming the file and the object;
+// and `afterglow bake` refuses them, or an automatic placement over --max-probes, writing
+// nothing.
+#include <filesystem>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "afterglow/probes/probes_file.h"
+#include "afterglow/probes/tetrahedralize.h"
+#include "afterglow/runtime/probe_sh_file.h"
+#include "test_util.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace afterglow::test {
+namespace {
+
+// A valid placement of five probes in two tetrahedra.
+json placement() {
+  return json::parse(R"({"format": "afterglow-light-probes", "version": 1,
+    "positions": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]],
+    "kinds": ["grid", "refined", "moved", "pinned", "grid"], "names": {"3": "door"},
+    "tetrahedra": [[0, 1, 2, 3], [1, 4, 2, 3]], "neighbours": [[1, -1, -1, -1], [-1, 0, -1, -1]]})");
+}
+
+std::string errorOf(const json& doc) {
+  Result<probes::ProbesFile> r = probes::parseProbesFile(doc.dump(), "level.probes.json");
+  EXPECT_FALSE(r) << doc.dump();
+  if (r) return {};
+  EXPECT_EQ(r.message().find('\n'), std::string::npos);
+  EXPECT_EQ(r.message().rfind("level.probes.json: ", 0), 0u) << r.message();
+  return r.message();
+}
+
+TEST(ProbesFiles, APlacementReadsBackWithItsKindsNamesAndTetrahedra) {
+  Result<probes::ProbesFile> r = probes::parseProbesFile(placement().dump(), "p.json");
+  ASSERT_TRUE(r) << r.message();
+  ASSERT_EQ(r->positions.size(), 5u);
+  EXPECT_EQ(r->kinds[1], probes::ProbeKind::Refined);
+  EXPECT_EQ(r->kinds[3], probes::ProbeKind::Pinned);
+  EXPECT_EQ(r->names[3], "door");
+  EXPECT_EQ(r->mesh.tetrahedra.size(), 2u);
+  EXPECT_EQ(r->mesh.neighbours[0], glm::ivec4(1, -1, -1, -1));
+  // What probes::probesJson writes reads back to the same mesh.
+  probes::Placement written;
+  written.positions = r->positions;
+  written.kinds = r->kinds;
+  Result<probes::ProbesFile> again = probes::parseProbesFile(
+      probes::probesJson(written, r->names, r->mesh, "{}", "{}"), "again.json");
+  ASSERT_TRUE(again) << again.message();
+  EXPECT_EQ(again->mesh.tetrahedra, r->mesh.tetrahedra);
+  EXPECT_EQ(again->mesh.neighbours, r->mesh.neighbours);
+  EXPECT_EQ(again->names, r->names);
+}
+
+TEST(ProbesFiles, BadPlacementsNameTheFileAndTheObject) {
+  json nan = placement();
+  nan["positions"][2] = json::array({0, 3.5e39, 0});  // finite, but infinite as a float
+  EXPECT_NE(errorOf(nan).find("probe 2"), std::string::npos);
+  nan["positions"][2] = json::array({0, "NaN", 0});
+  EXPECT_NE(errorOf(nan).find("probe 2"), std::string::npos);
+
+  json index = placement();
+  index["tetrahedra"][1] = json::array({1, 5, 2, 3});
+  EXPECT_NE(errorOf(index).find("tetrahedron 1"), std::string::npos) << errorOf(index);
+
+  json negative = placement();
+  negative["tetrahedra"][0] = json::array({0, -1, 2, 3});
+  EXPECT_NE(errorOf(negative).find("tetrahedron 0"), std::string::npos);
+
+  json neighbours = placement();
+  neighbours["neighbours"][1] = json::array({-1, -1, -1, -1});  // no longer mutual
+  EXPECT_NE(errorOf(neighbours).find("tetrahedron"), std::string::npos) << errorOf(neighbours);
+
+  json inverted = placement();
+  inverted["tetrahedra"][0] = json::array({1, 0, 2, 3});  // negative orientation
+  EXPECT_NE(errorOf(inverted).find("tetrahedron 0"), std::string::npos) << errorOf(inverted);
+
+  json kind = placement();
+  kind["kinds"][4] = "floating";
+  EXPECT_NE(errorOf(kind).find("probe 4"), std::string::npos);
+
+  json format = placement();
+  format.erase("format");
+  EXPECT_NE(errorOf(format).find("afterglow probes place"), std::string::npos);
+}
+
+TEST(ProbesFiles, TheShFileRoundTripsAndRefusesDamage) {
+  runtime::ProbeShFile file;
+  file.sh.resize(3);
+  for (size_t p = 0; p < 3; ++p)
+    for (int i = 0; i < runtime::kShCount; ++i)
+      file.sh[p].c[i] = glm::vec3(float(p) + 0.1f * float(i), -0.5f * float(i), 1e-3f * float(p));
+  file.deringWindow = 4.0f;
+  const std::vector<uint8_t> bytes = runtime::serializeProbeSh(file);
+  ASSERT_EQ(bytes.size(), runtime::kProbeShHeaderSize + 3 * 27 * 4);
+  runtime::ProbeShFile back;
+  std::string error;
+  ASSERT_TRUE(runtime::parseProbeSh(bytes.data(), bytes.size(), back, &error)) << error;
+  EXPECT_EQ(back.deringWindow, 4.0f);
+  for (size_t p = 0; p < 3; ++p)
+    for (int i = 0; i < runtime::kShCount; ++i) EXPECT_EQ(back.sh[p].c[i], file.sh[p].c[i]);
+
+  std::vector<uint8_t> shorter(bytes.begin(), bytes.end() - 4);
+  EXPECT_FALSE(runtime::parseProbeSh(shorter.data(), shorter.size(), back, &error));
+  EXPECT_NE(error.find("3 probes need"), std::string::npos) << error;
+  EXPECT_TRUE(back.sh.empty());
+  std::vector<uint8_t> nan = bytes;
+  const float bad = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(nan.data() + runtime::kProbeShHeaderSize + (27 + 5) * 4, &bad, 4);
+  EXPECT_FALSE(runtime::parseProbeSh(nan.data(), nan.size(), back, &error));
+  EXPECT_NE(error.find("probe 1"), std::string::npos) << error;
+  std::vector<uint8_t> version = bytes;
+  version[8] = 2;
+  EXPECT_FALSE(runtime::parseProbeSh(version.data(), version.size(), back, &error));
+  EXPECT_NE(error.find("version 2"), std::string::npos) << error;
+}
+
+TEST(ProbesFiles, BakeRefusesBadProbesAndWritesNothing) {
+  const std::string dir = tempDir("probes_files_bake");
+  json index = placement();
+  index["tetrahedra"][1] = json::array({1, 7, 2, 3});
+  std::ofstream(dir + "/bad.json") << index.dump();
+  CliRun bad = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --quality draft "
+                           "--texels-per-unit 16 --quiet --probes '" + dir + "/bad.json'");
+  EXPECT_EQ(bad.exitCode, 1) << bad.err;
+  EXPECT_NE(bad.err.find("bad.json: tetrahedron 1"), std::string::npos) << bad.err;
+  EXPECT_EQ(bad.err.find('\n'), bad.err.size() - 1) << "one line: " << bad.err;
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+
+  CliRun budget = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --quality draft "
+                              "--texels-per-unit 16 --quiet --probe-spacing 0.01 --max-probes 500");
+  EXPECT_EQ(budget.exitCode, 1) << budget.err;
+  EXPECT_NE(budget.err.find("--spacing"), std::string::npos) << budget.err;
+  EXPECT_FALSE(fs::exists(dir + "/out"));
+
+  // And a good placement is baked as given.
+  std::ofstream(dir + "/good.json") << placement().dump();
+  CliRun good = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --quality draft "
+                            "--texels-per-unit 16 --quiet --probes '" + dir + "/good.json'");
+  ASSERT_EQ(good.exitCode, 0) << good.err;
+  const json written = json::parse(slurp(dir + "/out/probes/light_probes.json"));
+  EXPECT_EQ(written["positions"], placement()["positions"]);
+  EXPECT_EQ(written["tetrahedra"], placement()["tetrahedra"]);
+  runtime::ProbeShFile sh;
+  std::string error;
+  ASSERT_TRUE(runtime::readProbeSh(dir + "/out/probes/light_probes_sh.bin", sh, &error)) << error;
+  EXPECT_EQ(sh.sh.size(), 5u);
+}
+
+}  // namespace
+}  // namespace afterglow::test
