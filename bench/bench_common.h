@@ -35,5 +35,6 @@ int benchAccuracy(int argc, char** argv);
 int benchBake(int argc, char** argv);
 int benchRuntime(int argc, char** argv);
 int benchViews(int argc, char** argv);
+int benchProbes(int argc, char** argv);
 
 }  // namespace afterglow::bench

@@ -215,43 +215,68 @@ Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
     return a / (a + b);
   };
 
+  // The directions, in region order (a region's cells together), with their SH basis and the
+  // products Ω Y_i Y_j the sky's transfer sums: the same for every probe, computed once.
+  std::vector<glm::vec3> directions(rays);
+  std::vector<uint32_t> regionOf(rays);
+  std::vector<float> basis(size_t(rays) * kShCount), products(size_t(rays) * runtime::kProbeSkyCount);
+  double allProducts[runtime::kProbeSkyCount] = {};
+  {
+    uint32_t k = 0;
+    for (uint32_t by = 0; by < binsSide; ++by)
+      for (uint32_t bx = 0; bx < binsSide; ++bx)
+        for (uint32_t cy = 0; cy < cellsPerBin; ++cy)
+          for (uint32_t cx = 0; cx < cellsPerBin; ++cx, ++k) {
+            const uint32_t x = bx * cellsPerBin + cx, y = by * cellsPerBin + cy;
+            const glm::vec2 q(-1.0f + 2.0f * (float(x) + 0.5f) / float(side),
+                              -1.0f + 2.0f * (float(y) + 0.5f) / float(side));
+            directions[k] = probeDirection(q);
+            regionOf[k] = by * binsSide + bx;
+            float* yk = &basis[size_t(k) * kShCount];
+            runtime::shBasis(directions[k], yk);
+            for (int i = 0; i < kShCount; ++i)
+              for (int j = i; j < kShCount; ++j) {
+                const int at = runtime::probeSkyIndex(i, j);
+                products[size_t(k) * runtime::kProbeSkyCount + size_t(at)] = omega * yk[i] * yk[j];
+                allProducts[at] += double(omega) * double(yk[i]) * double(yk[j]);
+              }
+          }
+  }
+  bool anyEmitter = false;
+  for (int s2 : emitterSource) anyEmitter = anyEmitter || s2 >= 0;
+
   std::vector<ProbeResult> results(count);
   const TexelLookup lookup(texels);
   progress.begin("probe rays", count);
+  // Several probes' rays per trace, as the texels' gather does (Embree's streams and the hit
+  // lookup's prefetching do better on a couple of thousand rays than on one probe's).
+  constexpr size_t kProbesPerBatch = 4;
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     GatherBatch batch;
-    for (size_t p = begin; p < end && !progress.cancelled(); ++p) {
+    std::vector<uint8_t> hitRay(rays);
+    for (size_t first = begin; first < end && !progress.cancelled(); first += kProbesPerBatch) {
+      const size_t last = std::min(end, first + kProbesPerBatch);
+      batch.clear();
+      for (size_t p = first; p < last; ++p)
+        for (uint32_t k = 0; k < rays; ++k) batch.addDirection(mesh.positions[p], directions[k]);
+      batch.trace(tracer, texels, &lookup);
+      for (size_t p = first; p < last; ++p) {
       const glm::vec3 origin = mesh.positions[p];
+      const size_t base = (p - first) * rays;
       ProbeResult& res = results[p];
       res.rows.assign(bins, {});
       res.source.assign(sourceCount * kShCount, 0.0);
-      // The sphere's cells, one jittered ray each, in region order (a region's cells together).
-      batch.clear();
-      std::vector<uint32_t> regionOf(rays);
-      uint32_t k = 0;
-      for (uint32_t by = 0; by < binsSide; ++by)
-        for (uint32_t bx = 0; bx < binsSide; ++bx)
-          for (uint32_t cy = 0; cy < cellsPerBin; ++cy)
-            for (uint32_t cx = 0; cx < cellsPerBin; ++cx, ++k) {
-              const uint32_t x = bx * cellsPerBin + cx, y = by * cellsPerBin + cy;
-              const glm::vec2 q(-1.0f + 2.0f * (float(x) + 0.5f) / float(side),
-                                -1.0f + 2.0f * (float(y) + 0.5f) / float(side));
-              batch.addDirection(origin, probeDirection(q));
-              regionOf[k] = by * binsSide + bx;
-            }
-      batch.trace(tracer, texels, &lookup);
       const float rowWeight = 1.0f / float(perBin);
+      uint32_t hits = 0;
       for (uint32_t r = 0; r < rays; ++r) {
-        const Hit& hit = batch.hits()[r];
+        const Hit& hit = batch.hits()[base + r];
+        hitRay[r] = hit.valid() ? 1 : 0;
         if (!hit.valid()) continue;
-        const glm::vec3 dir = batch.rays()[r].direction;
-        float y[kShCount];
-        runtime::shBasis(dir, y);
-        for (int i = 0; i < kShCount; ++i)
-          for (int j = i; j < kShCount; ++j)
-            res.blocked[runtime::probeSkyIndex(i, j)] += double(omega) * double(y[i]) * double(y[j]);
+        ++hits;
+        const glm::vec3 dir = directions[r];
+        const float* y = &basis[size_t(r) * kShCount];
         // Emission seen along the ray (its share against the emitter's area samples).
-        const int material = materialOf(scene, hit);
+        const int material = anyEmitter ? materialOf(scene, hit) : -1;
         if (material >= 0 && size_t(material) < emitterSource.size() && emitterSource[size_t(material)] >= 0) {
           const size_t s = size_t(emitterSource[size_t(material)]);
           const Emitter& e = *refs[s].emitter;
@@ -266,7 +291,7 @@ Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
           }
         }
         // Bounced light: the hit's cluster, or the far cluster standing in for it from here.
-        const uint32_t code = batch.codes()[r];
+        const uint32_t code = batch.codes()[base + r];
         if (code == TexelGather::kNoHit) continue;
         const uint32_t t = code & TexelGather::kTexelMask;
         uint32_t target = kNoTexel;
@@ -278,6 +303,17 @@ Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
           if (target == kNoTexel) target = clusters.texelCluster[t];
         }
         if (target != kNoTexel) res.rows[regionOf[r]].emplace_back(target, rowWeight);
+      }
+      // The sky the hits block: summed over the hits, or over the misses taken from the whole
+      // sphere's sum, whichever are fewer.
+      const bool overHits = hits <= rays / 2;
+      if (overHits) std::fill(res.blocked, res.blocked + runtime::kProbeSkyCount, 0.0);
+      else std::copy(allProducts, allProducts + runtime::kProbeSkyCount, res.blocked);
+      for (uint32_t r = 0; r < rays; ++r) {
+        if (bool(hitRay[r]) != overHits) continue;
+        const float* pk = &products[size_t(r) * runtime::kProbeSkyCount];
+        const double sign = overHits ? 1.0 : -1.0;
+        for (int k = 0; k < runtime::kProbeSkyCount; ++k) res.blocked[k] += sign * double(pk[k]);
       }
       for (auto& row : res.rows) {
         std::sort(row.begin(), row.end());
@@ -348,6 +384,7 @@ Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
         }
       }
       progress.advance();
+      }
     }
   }, 8);
   progress.end();

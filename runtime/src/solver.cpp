@@ -191,13 +191,23 @@ void Solver::probeRadiance(size_t first, size_t count, ShL2* out) const {
   forBlocks(count, [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) {
       const size_t p = first + k;
-      ShL2 sh;
-      // Bounced light, region by region.
+      // Bounced light, region by region: each region's mean radiance (a row of links) spread
+      // over the nine coefficients by the region's weights, four channels at a time.
+      glm::vec4 acc[kShCount];
+      for (glm::vec4& a : acc) a = glm::vec4(0.0f);
       for (uint32_t b = 0; b < bins; ++b) {
-        const glm::vec3 w = indirect * glm::vec3(linkRow(probes.links, p * bins + b, r));
+        const glm::vec4 w = linkRow(probes.links, p * bins + b, r);
         const float* y = &probes.binSh[size_t(b) * kShCount];
-        for (int i = 0; i < kShCount; ++i) sh.c[i] += y[i] * w;
+#ifdef AFTERGLOW_SSE2
+        const __m128 wv = _mm_loadu_ps(&w.x);
+        for (int i = 0; i < kShCount; ++i)
+          _mm_storeu_ps(&acc[i].x, _mm_add_ps(_mm_loadu_ps(&acc[i].x), _mm_mul_ps(_mm_set1_ps(y[i]), wv)));
+#else
+        for (int i = 0; i < kShCount; ++i) acc[i] += y[i] * w;
+#endif
       }
+      ShL2 sh;
+      for (int i = 0; i < kShCount; ++i) sh.c[i] = indirect * glm::vec3(acc[i]);
       for (size_t s = 0; s < data_.sources.size(); ++s) {
         const std::vector<float>& transfer = data_.sources[s].probeTransfer;
         const glm::vec3 scale = sourceScale_[s];

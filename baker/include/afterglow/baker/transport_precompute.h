@@ -116,8 +116,8 @@ struct ProbeOptions {
   // octahedral grid (Clarberg's map), jittered per probe. Bounced light is gathered per region
   // of binsSide² regions (blocks of cells; raysSide must be a multiple of binsSide): more
   // regions follow bounced light's direction more closely but make more links.
-  int raysSide = 24;
-  int binsSide = 6;
+  int raysSide = 20;
+  int binsSide = 5;
   // Emissive surfaces seen by a probe: this many points chosen by area on each emissive
   // material, combined with the probe's rays that hit them (balance heuristic), so small lamps
   // and emissive walls are both well sampled.
