@@ -293,6 +293,10 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   report["raysTraced"] = result.raysTraced;
   report["stageRays"] = stageRays;
   report["transport"] = transportInfo;
+  report["probes"] = {{"count", result.transport.probes.count()},
+                      {"tetrahedra", result.transport.probes.mesh.tetrahedra.size()},
+                      {"links", result.transport.probes.links.linkCount()},
+                      {"transportBytes", result.transport.probeBytes()}};
   report["stages"] = stages;
   report["peakMemoryBytes"] = peakMemoryBytes();
   report["atlases"] = atlases;
