@@ -289,5 +289,60 @@ TEST(ProbesBake, DeterministicAndSampledAtTheProbesThemselves) {
   }
 }
 
+// An engine may refresh the probes apart from the lightmaps, a few at a time: after a light
+// changes, updates without the probes leave them as they were, and budgeted updateProbes() calls
+// (one block of 256 each, at a budget no block fits) come round to every probe, ending equal
+// to a full refresh.
+TEST(ProbesBake, ProbesRefreshAloneWithinABudget) {
+  scenes::Scene scene = groundPlate(0.5f);
+  unwrapAt(scene, 4.0f);
+  scenes::Light sun;
+  sun.name = "sun";
+  sun.type = scenes::LightType::Directional;
+  sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+  scene.lights.push_back(sun);
+  BakeOptions options = draftOptions();
+  std::vector<glm::vec3> positions;
+  for (int z = 0; z < 8; ++z)
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 10; ++x)
+        positions.emplace_back(-1.5f + 0.3f * float(x), 0.2f + 0.3f * float(y), -1.5f + 0.4f * float(z));
+  options.probes = meshOf(positions);
+  const BakeResult r = bakeOrDie(scene, options);
+  std::string error;
+  std::unique_ptr<runtime::Runtime> rt = runtime::Runtime::fromData(r.transport, &error);
+  ASSERT_TRUE(rt) << error;
+  rt->update();
+  runtime::ShL2 before;
+  ASSERT_TRUE(rt->probeSh(0, &before));
+  ASSERT_TRUE(rt->setLightColor("sun", glm::vec3(0.2f, 0.4f, 1.0f)));
+  runtime::UpdateOptions noProbes;
+  noProbes.probes = false;
+  EXPECT_EQ(rt->update(noProbes).probes, 0);
+  runtime::ShL2 unchanged;
+  ASSERT_TRUE(rt->probeSh(0, &unchanged));
+  for (int i = 0; i < runtime::kShCount; ++i) EXPECT_EQ(unchanged.c[i], before.c[i]);
+
+  const int n = rt->probeCount();
+  ASSERT_EQ(n, 640);
+  int refreshed = 0, calls = 0;
+  while (refreshed < n && calls < 100) {
+    const runtime::UpdateStats s = rt->updateProbes(1e-9);
+    EXPECT_EQ(s.probes, std::min(256, n - refreshed)) << "call " << calls;
+    refreshed += s.probes;
+    ++calls;
+  }
+  EXPECT_EQ(calls, 3);
+  std::vector<runtime::ShL2> budgeted(static_cast<size_t>(n));
+  for (int p = 0; p < n; ++p) ASSERT_TRUE(rt->probeSh(p, &budgeted[size_t(p)]));
+  EXPECT_EQ(rt->updateProbes().probes, n);
+  for (int p = 0; p < n; ++p) {
+    runtime::ShL2 full;
+    ASSERT_TRUE(rt->probeSh(p, &full));
+    for (int i = 0; i < runtime::kShCount; ++i) ASSERT_EQ(budgeted[size_t(p)].c[i], full.c[i]);
+  }
+  EXPECT_NE(budgeted[0].c[0], before.c[0]) << "the light's change must show";
+}
+
 }  // namespace
 }  // namespace afterglow::baker
