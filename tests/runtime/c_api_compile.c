@@ -51,6 +51,36 @@ int afterglow_test_c_relight(const char* path, float* rgb, size_t float_count, c
   return ok;
 }
 
+/* The light probe calls on a transport with five probes: out receives probe 2's SH (27 floats),
+ * the SH sampled at (0.25, 0.25, 0.25) (27), probe 2's position (3), then 3 unused floats and
+ * the irradiance of the sampled SH for the normal (1, 2, 3) normalised (3). Returns 1 when
+ * every call behaved as documented. */
+int afterglow_test_c_probes(const char* path, float* out) {
+  AfterglowUpdateOptions options;
+  AfterglowUpdateStats stats;
+  char err[256];
+  int ok = 1, hint = 0;
+  const float n = 1.0f / 3.7416574f; /* 1 / |(1, 2, 3)| */
+  AfterglowRuntime* rt = afterglow_runtime_load(path, err, sizeof err);
+  if (!rt) return 0;
+  afterglow_runtime_default_options(&options);
+  ok &= options.probes == 1;
+  options.max_bounces = 4;
+  options.from_scratch = 1;
+  ok &= afterglow_runtime_update(rt, &options, &stats);
+  ok &= stats.probes == 5;
+  ok &= afterglow_runtime_probe_count(rt) == 5;
+  ok &= afterglow_runtime_probe_sh(rt, 2, out);
+  ok &= !afterglow_runtime_probe_sh(rt, 5, out + 54);
+  ok &= afterglow_runtime_sample_probes(rt, 0.25f, 0.25f, 0.25f, &hint, out + 27);
+  ok &= afterglow_runtime_probe_position(rt, 2, out + 54);
+  afterglow_runtime_evaluate_irradiance(out + 27, n, 2.0f * n, 3.0f * n, out + 60);
+  ok &= afterglow_runtime_update_probes(rt, 0.0, &stats) && stats.probes == 5;
+  ok &= afterglow_runtime_probe_count(NULL) == 0;
+  afterglow_runtime_free(rt);
+  return ok;
+}
+
 /* afterglow_runtime_load's failure path: returns 1 when it returned NULL. */
 int afterglow_test_c_load_fails(const char* path, char* err, size_t err_size) {
   AfterglowRuntime* rt = afterglow_runtime_load(path, err, err_size);

@@ -58,6 +58,7 @@ void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 extern "C" int afterglow_test_c_relight(const char* path, float* rgb, size_t float_count,
                                         char* err, size_t err_size);
 extern "C" int afterglow_test_c_load_fails(const char* path, char* err, size_t err_size);
+extern "C" int afterglow_test_c_probes(const char* path, float* out);
 
 namespace afterglow::runtime {
 namespace {
@@ -167,6 +168,27 @@ TransportData makeScene(uint32_t scale = 1, uint64_t seed = 7) {
   for (int i = 0; i < kShCount; ++i) d.skySh[i] = glm::vec3(0.2f, 0.3f, 0.5f) * (i == 0 ? 1.0f : 0.1f);
   d.indirectIntensity = 1.0f;
   d.albedoBoost = 1.0f;
+  // Five light probes in two tetrahedra, two regions each, seeing random clusters, the sky and
+  // every source.
+  ProbeTransport& probes = d.probes;
+  probes.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  probes.mesh.tetrahedra = {{0, 1, 2, 3}, {1, 4, 2, 3}};
+  probes.mesh.neighbours = {{1, -1, -1, -1}, {-1, 0, -1, -1}};
+  probes.bins = 2;
+  for (uint32_t k = 0; k < probes.bins * kShCount; ++k) probes.binSh.push_back(rng.unit() - 0.3f);
+  probes.links = SparseLinks(d.clusterCount);
+  for (uint32_t r = 0; r < 5 * probes.bins; ++r) {
+    cols.clear();
+    w.clear();
+    for (uint32_t c = rng.below(4); c < d.clusterCount; c += 1 + rng.below(5)) {
+      cols.push_back(c);
+      w.push_back(0.05f + 0.1f * rng.unit());
+    }
+    probes.links.appendRow(cols.data(), w.data(), cols.size());
+  }
+  for (uint32_t k = 0; k < 5 * kProbeSkyCount; ++k) probes.sky.push_back(floatToHalf(rng.unit() - 0.4f));
+  for (Source& s : d.sources)
+    for (uint32_t k = 0; k < 5 * kShCount; ++k) s.probeTransfer.push_back(rng.unit() - 0.2f);
   EXPECT_EQ(d.validate(), "");
   return d;
 }
@@ -637,6 +659,56 @@ TEST(RuntimeApi, ReadsSeeWholeFramesWhileUpdating) {
   EXPECT_GE(reads.load(), 5);
 }
 
+// ---- Light probes -----------------------------------------------------------------------------
+
+// A probe's SH from the runtime equals the transfer written out by hand: the sources scaled by
+// colour × intensity (emission for the lamp), the sky through K, and the regions' rows of links
+// over the clusters' reflected light, scaled by the indirect intensity.
+TEST(RuntimeApi, ProbeShIsTheTransferSummedByHand) {
+  TransportData d = makeScene();
+  d.indirectIntensity = 0.75f;
+  Solver solver(d);
+  solver.solve({4, 0.0f});
+  std::vector<ShL2> sh(d.probes.count());
+  solver.probeRadiance(0, sh.size(), sh.data());
+  const std::vector<glm::vec3>& r = solver.clusterReflected();
+  for (size_t p = 0; p < d.probes.count(); ++p) {
+    for (int i = 0; i < kShCount; ++i) {
+      glm::dvec3 want(0.0);
+      for (const Source& s : d.sources) {
+        const glm::vec3 scale =
+            s.kind == SourceKind::Emissive ? d.materials[s.material].emission : s.color * s.intensity;
+        want += glm::dvec3(scale) * double(s.probeTransfer[p * kShCount + size_t(i)]);
+      }
+      for (int j = 0; j < kShCount; ++j)
+        want += glm::dvec3(d.skySh[j]) *
+                double(halfToFloat(d.probes.sky[p * kProbeSkyCount + size_t(probeSkyIndex(i, j))]));
+      for (uint32_t b = 0; b < d.probes.bins; ++b) {
+        const size_t row = p * d.probes.bins + b;
+        glm::dvec3 gathered(0.0);
+        for (size_t k = d.probes.links.rowStart[row]; k < d.probes.links.rowStart[row + 1]; ++k)
+          gathered += double(d.probes.links.weightAt(row, k)) * glm::dvec3(r[d.probes.links.targetAt(k)]);
+        want += 0.75 * double(d.probes.binSh[b * kShCount + size_t(i)]) * gathered;
+      }
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(sh[p].c[i][c], want[c], 1e-5 * (1.0 + std::abs(want[c])))
+            << "probe " << p << " coefficient " << i;
+    }
+  }
+  // Sampled at a probe, the runtime returns that probe; between them, a convex mix.
+  auto rt = make(d);
+  rt->update(scratch(4));
+  ShL2 own;
+  ASSERT_TRUE(rt->probeSh(4, &own));
+  int hint = 0;
+  const ShL2 at = rt->sampleProbes(glm::vec3(1, 1, 1), &hint);
+  EXPECT_EQ(hint, 1);
+  for (int i = 0; i < kShCount; ++i)
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(at.c[i][c], own.c[i][c], 1e-5f * (1.0f + std::abs(own.c[i][c])));
+  EXPECT_FALSE(rt->probeSh(5, &own));
+  EXPECT_EQ(rt->probePosition(9), glm::vec3(0.0f));
+}
+
 // ---- C API ------------------------------------------------------------------------------------
 
 TEST(RuntimeApi, CApiMatchesTheCppApi) {
@@ -675,6 +747,28 @@ TEST(RuntimeApi, CApiMatchesTheCppApi) {
   EXPECT_EQ(afterglow_test_c_load_fails(path.c_str(), full, sizeof full), 1);
   EXPECT_EQ(std::string(full).rfind(path, 0), 0u) << full;
   EXPECT_EQ(afterglow_runtime_load(nullptr, full, sizeof full), nullptr);
+  // The light probes through C: the same SH, positions and irradiance as through C++.
+  {
+    ASSERT_TRUE(saveTransport(makeScene(), path, &error)) << error;
+    auto probes = Runtime::load(path, &error);
+    ASSERT_TRUE(probes) << error;
+    probes->update(scratch(4));
+    float fromCProbes[27 * 3 + 3] = {};
+    EXPECT_EQ(afterglow_test_c_probes(path.c_str(), fromCProbes), 1);
+    std::filesystem::remove(path);
+    ShL2 own;
+    ASSERT_TRUE(probes->probeSh(2, &own));
+    const ShL2 mid = probes->sampleProbes(glm::vec3(0.25f, 0.25f, 0.25f));
+    const glm::vec3 e = Runtime::evaluateIrradiance(mid, glm::normalize(glm::vec3(1, 2, 3)));
+    for (int i = 0; i < kShCount; ++i)
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(fromCProbes[3 * i + c], own.c[i][c]);
+        EXPECT_EQ(fromCProbes[27 + 3 * i + c], mid.c[i][c]);
+      }
+    EXPECT_EQ(fromCProbes[54], 0.0f);  // probe 2's position (0, 1, 0)
+    EXPECT_EQ(fromCProbes[55], 1.0f);
+    for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(fromCProbes[57 + 3 + c], e[c]);
+  }
   EXPECT_EQ(afterglow_runtime_light_count(nullptr), 0);
   EXPECT_EQ(afterglow_runtime_update(nullptr, nullptr, nullptr), 0);
 }
