@@ -25,14 +25,19 @@ int benchProbes(int argc, char** argv) {
   std::string path = std::string(AFTERGLOW_SHARED_DIR) + "/scenes/sponza/Sponza-sun.gltf";
   float texelsPerUnit = 4.0f;
   int threads = 2, repeat = 5;
+  baker::ProbeOptions probeOptions;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
     auto next = [&]() { return i + 1 < argc ? std::atof(argv[++i]) : 0.0; };
     if (arg == "--texels-per-unit") texelsPerUnit = float(next());
     else if (arg == "--threads") threads = int(next());
     else if (arg == "--repeat") repeat = std::max(1, int(next()));
+    else if (arg == "--rays-side") probeOptions.raysSide = int(next());
+    else if (arg == "--regions-side") probeOptions.binsSide = int(next());
     else if (!arg.empty() && arg[0] != '-') path = arg;
-    else return fail("unknown option " + arg + " (--texels-per-unit N, --threads N, --repeat N)");
+    else
+      return fail("unknown option " + arg +
+                  " (--texels-per-unit N, --threads N, --repeat N, --rays-side N, --regions-side N)");
   }
   setThreadCount(threads);
   Result<scenes::Scene> loaded = loadBenchScene(path);
@@ -60,14 +65,17 @@ int benchProbes(int argc, char** argv) {
 
   baker::BakeOptions options;
   options.probes = mesh.value();
+  options.probeOptions = probeOptions;
   t0 = Clock::now();
   Result<baker::BakeResult> baked = baker::bake(scene, options);
   const double bakeSeconds = secondsSince(t0);
   if (!baked) return fail(baked.message());
   const baker::BakeResult& b = baked.value();
-  double probeSeconds = 0.0;
-  for (const baker::StageTime& s : b.stages)
-    if (s.name == "probes") probeSeconds = s.seconds;
+  double probeSeconds = 0.0, gatherRate = 0.0, probeRate = 0.0;
+  for (const baker::StageTime& s : b.stages) {
+    if (s.name == "probes") probeSeconds = s.seconds, probeRate = double(s.rays) / s.seconds / 1e6;
+    if (s.name == "gather") gatherRate = double(s.rays) / s.seconds / 1e6;
+  }
   const size_t count = placed->positions.size();
   const double placementTotal = tracerSeconds + placeSeconds + tetSeconds;
 
@@ -109,6 +117,8 @@ int benchProbes(int argc, char** argv) {
   std::printf("  precompute   probes %.2f s of a %.2f s bake: %.1f%%   target <= 20%%: %s\n",
               probeSeconds, bakeSeconds, 100.0 * probeSeconds / bakeSeconds,
               mark(probeSeconds <= 0.2 * bakeSeconds));
+  std::printf("               %.1f Mrays/s in the probes' stage, %.1f in the texels' gather\n",
+              probeRate, gatherRate);
   std::printf("               with the placement: %.2f s of %.2f s, %.1f%%\n",
               probeSeconds + placementTotal, bakeSeconds + placementTotal,
               100.0 * (probeSeconds + placementTotal) / (bakeSeconds + placementTotal));
