@@ -187,7 +187,6 @@ TEST(ProbesBake, CornellMatchesTheReferenceAtFreePoints) {
   for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
   unwrapAt(scene, 16.0f);
   BakeOptions options;  // the default quality
-  if (getenv("AG_RS")) options.probeOptions.raysSide = atoi(getenv("AG_RS")), options.probeOptions.binsSide = atoi(getenv("AG_BS"));
   // Probes on a grid inside the box, above the tall block.
   const scenes::Bounds box = scene.bounds();
   const glm::vec3 size = box.max - box.min;
