@@ -1,5 +1,6 @@
 // `afterglow probes place`: light-probe placement (probes::placeProbes), their tetrahedra
-// (probes::tetrahedralize), written as PROBES.json with a picture beside it.
+// (probes::tetrahedralize), written as PROBES.json with a picture beside it. `probes sample` is
+// in cmd_probes_sample.cpp.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -30,12 +31,13 @@ namespace afterglow::cli {
 
 const char kProbesHelp[] =
     "Usage: afterglow probes place SCENE -o PROBES.json [options]\n"
+    "       afterglow probes sample OUT/ --at x,y,z [--at x,y,z ...] [--normal x,y,z] [--json]\n"
     "\n"
-    "Places light probes for dynamic objects: a grid over the static geometry (or over the probe\n"
-    "volumes authored on glTF nodes as extras.afterglow.probeVolume = {\"size\": [x, y, z],\n"
-    "\"spacing\": s}), refined on an octree where it holds or touches geometry, never inside\n"
-    "geometry (a candidate whose rays mostly see the backs of single-sided surfaces is moved to\n"
-    "a free spot in its cell or dropped) and kept a margin off surfaces; then a Delaunay\n"
+    "probes place: places light probes for dynamic objects: a grid over the static geometry (or\n"
+    "over the probe volumes authored on glTF nodes as extras.afterglow.probeVolume = {\"size\":\n"
+    "[x, y, z], \"spacing\": s}), refined on an octree where it holds or touches geometry, never\n"
+    "inside geometry (a candidate whose rays mostly see the backs of single-sided surfaces is\n"
+    "moved to a free spot in its cell or dropped) and kept a margin off surfaces; then a Delaunay\n"
     "tetrahedralisation of the probes for interpolation. Writes, all or nothing:\n"
     "  PROBES.json   positions, kinds (grid, refined, moved, pinned), tetrahedra and their\n"
     "                neighbours, settings and summary (README: the light probes file)\n"
@@ -59,6 +61,25 @@ const char kProbesHelp[] =
     "  --threads N               worker threads (default: every core); the output is identical\n"
     "                            for any count\n"
     "  --quiet                   no progress and no summary\n"
+    "  -h, --help                this help\n"
+    "\n"
+    "probes sample: prints a bake's light probes interpolated at each --at point (tetrahedral\n"
+    "interpolation, as the runtime's sampleProbes gives an engine's dynamic object there): one\n"
+    "line per point, x,y,z then E/pi (linear RGB, the lightmaps' unit: shade with albedo x\n"
+    "value) for the six axis normals +X -X +Y -Y +Z -Z, or for each --normal given.\n"
+    "OUT/transport.agt is solved as the bake solved it (from scratch, its bounce count from\n"
+    "OUT/report.json), so a point on a probe gives that probe's SH in\n"
+    "OUT/probes/light_probes_sh.bin (deringed alike).\n"
+    "\n"
+    "Options:\n"
+    "  --at x,y,z                a point, metres in the scene's axes; repeatable; required\n"
+    "  --normal x,y,z            a normal to evaluate instead of the six axes; repeatable\n"
+    "  --json                    a JSON array instead, one object per point: position,\n"
+    "                            tetrahedron (-1: none), inside (false: outside the probes' hull,\n"
+    "                            projected onto its nearest face), probes and weights (the\n"
+    "                            interpolation's; -1 and 0 where unused), sh (the radiance SH L2,\n"
+    "                            27 floats as in light_probes_sh.bin: c0.r c0.g c0.b c1.r ...),\n"
+    "                            irradiance ([{normal, value}], E/pi per normal)\n"
     "  -h, --help                this help\n";
 
 namespace {
@@ -221,13 +242,14 @@ int runPlace(int argc, char** argv, int first) {
 int runProbes(int argc, char** argv, int first) {
   const std::string verb = first < argc ? argv[first] : "";
   if (verb == "place") return runPlace(argc, argv, first + 1);
+  if (verb == "sample") return runProbesSample(argc, argv, first + 1);
   if (verb == "-h" || verb == "--help" || verb == "help") {
     std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
     return kExitOk;
   }
-  printError(verb.empty() ? "probes: missing a verb: place (see afterglow probes --help)"
+  printError(verb.empty() ? "probes: missing a verb: place or sample (see afterglow probes --help)"
                           : "probes: unknown verb '" + verb +
-                                "', there is place (see afterglow probes --help)");
+                                "', there are place and sample (see afterglow probes --help)");
   return kExitUsage;
 }
 
