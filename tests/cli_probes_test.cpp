@@ -1,17 +1,27 @@
 // `afterglow probes place` run as a user would: the probes file holds probes inside the room,
 // off its surfaces, a valid tetrahedral mesh over them, the user's pinned probes by name, and a
-// picture; bad user files and budgets are refused with a message naming the cause and nothing
-// written.
+// picture; with --bake, probes added only across edges where the bake's light changes, never in
+// geometry, the same for any thread count; bad user files and budgets are refused with a message
+// naming the cause and nothing written.
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "afterglow/baker/raytracer.h"
+#include "afterglow/probes/bake_refinement.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
+#include "afterglow/runtime/runtime.h"
+#include "afterglow/scenes/procedural.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -96,6 +106,125 @@ TEST(CliProbes, APlacementAddedBackIsPinnedWithoutDuplicates) {
   size_t pinned = 0;
   for (const json& k : b["kinds"]) pinned += k == "pinned";
   EXPECT_EQ(pinned, a["positions"].size());
+}
+
+std::vector<glm::vec3> positionsOf(const json& doc) {
+  std::vector<glm::vec3> out;
+  for (const json& p : doc.at("positions"))
+    out.push_back({p[0].get<float>(), p[1].get<float>(), p[2].get<float>()});
+  return out;
+}
+
+// The Cornell box's lamp lights the room from a small patch of its ceiling: E/π changes by more
+// than 25% across most of the coarse grid's edges (1/r² below the lamp, the blocks' shadows, the
+// coloured walls), so --bake adds probes, each at the midpoint of an edge of the plain
+// placement's tetrahedra whose ends differ by more than the threshold in the bake.
+TEST(CliProbes, BakeRefinementSplitsEdgesWhereTheBakesLightChanges) {
+  const std::string dir = tempDir("cli_probes_bake_refine");
+  CliRun bake = runCli(dir, "bake builtin:cornell -o '" + dir +
+                                "/out' --quality draft --texels-per-unit 32 --quiet");
+  ASSERT_EQ(bake.exitCode, 0) << bake.err;
+  CliRun plain = runCli(dir, "probes place builtin:cornell -o '" + dir + "/plain.json' --quiet");
+  ASSERT_EQ(plain.exitCode, 0) << plain.err;
+  const std::string withBake = " --bake '" + dir + "/out' --width 160 --height 100";
+  CliRun one = runCli(dir, "probes place builtin:cornell -o '" + dir + "/one.json' --threads 1" +
+                               withBake);
+  ASSERT_EQ(one.exitCode, 0) << one.err;
+  EXPECT_NE(one.out.find("by the bake"), std::string::npos) << one.out;
+  CliRun two = runCli(dir, "probes place builtin:cornell -o '" + dir + "/two.json' --threads 2" +
+                               withBake + " --quiet");
+  ASSERT_EQ(two.exitCode, 0) << two.err;
+
+  // The same output for any thread count, but for the count and the timings it records.
+  json a = json::parse(slurp(dir + "/one.json")), b = json::parse(slurp(dir + "/two.json"));
+  for (json* doc : {&a, &b}) {
+    (*doc)["settings"].erase("threads");
+    for (const char* key : {"placeSeconds", "tetrahedraSeconds"}) (*doc)["summary"].erase(key);
+    (*doc)["summary"]["bakeRefinement"].erase("seconds");
+  }
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(slurp(dir + "/one.png"), slurp(dir + "/two.png"));
+
+  // The plain placement's probes first, then the added ones, of kind refined.
+  const json base = json::parse(slurp(dir + "/plain.json"));
+  const std::vector<glm::vec3> before = positionsOf(base), after = positionsOf(a);
+  const size_t added = a.at("summary").at("refinedByBake").get<size_t>();
+  ASSERT_GT(added, 10u);
+  ASSERT_EQ(after.size(), before.size() + added);
+  for (size_t i = 0; i < before.size(); ++i) ASSERT_EQ(after[i], before[i]) << "probe " << i;
+  for (size_t i = before.size(); i < after.size(); ++i) EXPECT_EQ(a["kinds"][i], "refined");
+
+  // The bake's E/π at the plain placement's probes, as the command samples it (the transport
+  // solved from scratch, walking in probe order).
+  std::string error;
+  std::unique_ptr<runtime::Runtime> rt = runtime::Runtime::load(dir + "/out/transport.agt", &error);
+  ASSERT_TRUE(rt) << error;
+  runtime::UpdateOptions update;
+  update.fromScratch = true;
+  rt->update(update);
+  std::vector<probes::AxisIrradiance> irradiance(before.size());
+  int hint = 0;
+  for (size_t i = 0; i < before.size(); ++i) {
+    const runtime::ShL2 sh = rt->sampleProbes(before[i], &hint);
+    for (int k = 0; k < 6; ++k)
+      irradiance[i][size_t(k)] = runtime::Runtime::evaluateIrradiance(sh, probes::axisNormal(k));
+  }
+  // Each added probe is the midpoint of an edge whose ends differ by more than the threshold.
+  const float floor = a["summary"]["bakeRefinement"].at("floor").get<float>();
+  EXPECT_GT(floor, 0.0f);
+  std::map<std::array<float, 3>, float> splits;  // midpoint -> largest difference of its edges
+  for (const json& t : base.at("tetrahedra"))
+    for (size_t i = 0; i < 4; ++i)
+      for (size_t j = i + 1; j < 4; ++j) {
+        const size_t p = t[i].get<size_t>(), q = t[j].get<size_t>();
+        const glm::vec3 m = 0.5f * (before[p] + before[q]);
+        float& d = splits[{m.x, m.y, m.z}];
+        d = std::max(d, probes::irradianceDifference(irradiance[p], irradiance[q], floor));
+      }
+  for (size_t i = before.size(); i < after.size(); ++i) {
+    const glm::vec3 p = after[i];
+    auto it = splits.find({p.x, p.y, p.z});
+    ASSERT_NE(it, splits.end()) << "probe " << i << " is no edge's midpoint";
+    EXPECT_GT(it->second, 0.25f) << "probe " << i;
+  }
+
+  // None inside geometry: inside the room, off its walls by the margin, and no ray from it meets
+  // the back of a surface (the blocks are closed boxes; every surface faces into the room).
+  const scenes::Scene scene = scenes::makeCornellBox();
+  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  ASSERT_TRUE(tracer) << tracer.message();
+  const float margin = a["settings"].at("margin").get<float>();
+  const float room[3] = {0.556f, 0.5488f, 0.5592f};
+  for (size_t i = before.size(); i < after.size(); ++i) {
+    const glm::vec3 p = after[i];
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_GE(p[k], margin * 0.99f) << "probe " << i;
+      EXPECT_LE(p[k], room[k] - (k == 0 ? 0.0f : margin * 0.99f)) << "probe " << i;
+    }
+    for (int x = -1; x <= 1; ++x)
+      for (int y = -1; y <= 1; ++y)
+        for (int z = -1; z <= 1; ++z) {
+          if (x == 0 && y == 0 && z == 0) continue;
+          baker::Ray ray;
+          ray.origin = p;
+          ray.direction = glm::normalize(glm::vec3(x, y, z));
+          const baker::Hit hit = tracer.value()->intersect(ray);
+          EXPECT_TRUE(!hit.valid() || hit.frontFace) << "probe " << i << " sees a back face";
+        }
+  }
+
+  // A budget keeps the largest differences and says so.
+  const size_t budget = before.size() + added / 2;
+  CliRun capped = runCli(dir, "probes place builtin:cornell -o '" + dir + "/capped.json'" +
+                                  withBake + " --max-probes " + std::to_string(budget));
+  ASSERT_EQ(capped.exitCode, 0) << capped.err;
+  EXPECT_NE(capped.out.find("--max-probes"), std::string::npos) << capped.out;
+  EXPECT_EQ(json::parse(slurp(dir + "/capped.json")).at("positions").size(), budget);
+
+  CliRun lone = runCli(dir, "probes place builtin:cornell -o '" + dir +
+                                "/lone.json' --refine-threshold 0.5");
+  EXPECT_EQ(lone.exitCode, 2);
+  EXPECT_NE(lone.err.find("--bake"), std::string::npos) << lone.err;
 }
 
 TEST(CliProbes, BadUserProbesAndBudgetsAreRefusedAndWriteNothing) {

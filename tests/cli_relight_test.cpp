@@ -1,9 +1,11 @@
 // `afterglow relight` run as a user would: a relit sky equals a bake with that sky, file for
-// file; bad names and folders are refused with a message naming them and nothing written; the
-// relit folder renders.
+// file; relit light probes equal a fresh bake's; bad names and folders are refused with a
+// message naming them and nothing written; the relit folder renders.
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +17,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "afterglow/runtime/probe_sh_file.h"
+#include "afterglow/scenes/gltf.h"
+#include "afterglow/scenes/procedural.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -123,6 +128,78 @@ TEST(CliRelight, RelitAlbedoEqualsABakeOfTheRelitScene) {
   EXPECT_EQ(whites, 2);
   const json used = gltf.at("extensionsUsed");
   EXPECT_NE(std::find(used.begin(), used.end(), "KHR_materials_specular"), used.end());
+}
+
+// The light probes' done-when through the CLI: relighting a bake with a light's colour changed
+// writes RELIT/probes/ whose SH equal those of a fresh bake of the scene with that colour. The
+// Cornell box gets a point light (the built-in box has only its emissive lamp, and `bake` takes
+// no light colour), written as glTF twice, differing in that colour alone, so both bakes trace
+// the very same rays.
+TEST(CliRelight, RelitProbesEqualAFreshBakesProbes) {
+  const std::string dir = tempDir("cli_relight_probes");
+  scenes::Scene scene = scenes::makeCornellBox();
+  scenes::Light lamp;
+  lamp.name = "lamp";
+  lamp.type = scenes::LightType::Point;
+  lamp.position = glm::vec3(0.15f, 0.4f, 0.3f);
+  lamp.radius = 0.02f;
+  lamp.intensity = 0.5f;
+  lamp.color = glm::vec3(1.0f, 0.8f, 0.6f);
+  scene.lights.push_back(lamp);
+  ASSERT_TRUE(scenes::saveGltf(scene, dir + "/warm/lamp.gltf"));
+  scene.lights.back().color = glm::vec3(0.2f, 0.5f, 1.0f);
+  ASSERT_TRUE(scenes::saveGltf(scene, dir + "/blue/lamp.gltf"));
+
+  CliRun bake = runCli(dir, "bake '" + dir + "/warm/lamp.gltf' -o '" + dir + "/out' " + kBake);
+  ASSERT_EQ(bake.exitCode, 0) << bake.err;
+  CliRun fresh = runCli(dir, "bake '" + dir + "/blue/lamp.gltf' -o '" + dir + "/fresh' " + kBake);
+  ASSERT_EQ(fresh.exitCode, 0) << fresh.err;
+  CliRun relit = runCli(dir, "relight '" + dir + "/out' --light lamp=0.2,0.5,1.0 -o '" + dir +
+                             "/relit'");
+  ASSERT_EQ(relit.exitCode, 0) << relit.err;
+  EXPECT_NE(relit.out.find("light probes"), std::string::npos) << relit.out;
+
+  auto readSh = [](const std::string& path) {
+    runtime::ProbeShFile file;
+    std::string error;
+    EXPECT_TRUE(runtime::readProbeSh(path, file, &error)) << error;
+    return file.sh;
+  };
+  const std::vector<runtime::ShL2> want = readSh(dir + "/fresh/probes/light_probes_sh.bin");
+  const std::vector<runtime::ShL2> got = readSh(dir + "/relit/probes/light_probes_sh.bin");
+  const std::vector<runtime::ShL2> before = readSh(dir + "/out/probes/light_probes_sh.bin");
+  ASSERT_GT(want.size(), 100u);
+  ASSERT_EQ(got.size(), want.size());
+  ASSERT_EQ(before.size(), want.size());
+  // Per coefficient, relative to the probe's largest (its own small coefficients are rounding).
+  auto worst = [](const std::vector<runtime::ShL2>& a, const std::vector<runtime::ShL2>& b) {
+    double out = 0.0;
+    for (size_t p = 0; p < a.size(); ++p) {
+      double scale = 1e-30;
+      for (const glm::vec3& c : b[p].c)
+        for (int k = 0; k < 3; ++k) scale = std::max(scale, double(std::abs(c[k])));
+      for (int i = 0; i < runtime::kShCount; ++i)
+        for (int k = 0; k < 3; ++k)
+          out = std::max(out, std::abs(double(a[p].c[i][k]) - double(b[p].c[i][k])) / scale);
+    }
+    return out;
+  };
+  const double diff = worst(got, want), changed = worst(before, want);
+  std::printf("relit probes vs a fresh bake's: max relative difference %.2e (the change itself: "
+              "%.2f)\n", diff, changed);
+  EXPECT_LE(diff, 1e-5);
+  EXPECT_GT(changed, 0.01);  // the colour did change them
+
+  // The placement is OUT's, its settings noting the relight.
+  const json outProbes = json::parse(slurp(dir + "/out/probes/light_probes.json"));
+  const json relitProbes = json::parse(slurp(dir + "/relit/probes/light_probes.json"));
+  for (const char* key : {"format", "positions", "kinds", "tetrahedra", "neighbours", "sh"})
+    EXPECT_EQ(relitProbes.at(key), outProbes.at(key)) << key;
+  const json& note = relitProbes.at("settings").at("relight");
+  ASSERT_EQ(note.at("changes").size(), 1u);
+  EXPECT_EQ(note["changes"][0].at("light"), "lamp");
+  EXPECT_EQ(json::parse(slurp(dir + "/relit/report.json")).at("relight").at("probes"),
+            want.size());
 }
 
 TEST(CliRelight, BadNamesAndFoldersAreRefusedAndWriteNothing) {

@@ -1,5 +1,6 @@
-// Light-probe placement (probes/placement.h): rooms built in code with known geometry, checked
-// against that geometry rather than the placement's own ray test; and the shared scenes.
+// Light-probe placement (probes/placement.h) and its refinement by a bake's light
+// (probes/bake_refinement.h): rooms built in code with known geometry, checked against that
+// geometry rather than the placement's own ray test; and the shared scenes.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -18,7 +19,9 @@
 
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/probes/bake_refinement.h"
 #include "afterglow/probes/placement.h"
+#include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/scenes/gltf.h"
 #include "test_util.h"
 
@@ -363,6 +366,96 @@ TEST(ProbePlacement, SameForAnyThreadCount) {
   EXPECT_EQ(one->kinds, two->kinds);
   EXPECT_EQ(one->moved, two->moved);
   EXPECT_EQ(one->rejected, two->rejected);
+}
+
+TEST(ProbeBakeRefinement, IrradianceDifferenceIsRelativeToTheBrighterLight) {
+  AxisIrradiance a, b;
+  a.fill(glm::vec3(1.0f, 0.8f, 0.2f));
+  b = a;
+  EXPECT_EQ(irradianceDifference(a, b, 0.0f), 0.0f);
+  b[3] = glm::vec3(0.0f);  // black below
+  EXPECT_FLOAT_EQ(irradianceDifference(a, b, 0.0f), 1.0f);
+  b[3] = glm::vec3(-0.5f);  // ringing counts as black
+  EXPECT_FLOAT_EQ(irradianceDifference(a, b, 0.0f), 1.0f);
+  // A dim channel is judged against the light's brightest: 0.2 -> 0.3 is a tenth of 1.
+  b = a;
+  b[0].b = 0.3f;
+  EXPECT_FLOAT_EQ(irradianceDifference(a, b, 0.0f), 0.1f);
+  EXPECT_FLOAT_EQ(irradianceDifference(b, a, 0.0f), 0.1f);
+  // Under the floor, differences count against the floor.
+  a.fill(glm::vec3(0.002f));
+  b.fill(glm::vec3(0.001f));
+  EXPECT_FLOAT_EQ(irradianceDifference(a, b, 0.0f), 0.5f);
+  EXPECT_FLOAT_EQ(irradianceDifference(a, b, 0.1f), 0.01f);
+}
+
+// A light boundary across the room with a box (a plane at x = 1.55 through the box: bright on
+// one side, dim on the other): only edges across it are split, at their midpoints, none in the
+// box or within the margin of a surface; deterministic, and within the budget.
+TEST(ProbeBakeRefinement, SplitsTheEdgesAcrossALightBoundaryOnly) {
+  const Scene scene = roomWithBox();
+  auto tracer = trace(scene);
+  ASSERT_TRUE(tracer);
+  const PlacementOptions o = roomOptions();
+  Result<Placement> placed = placeProbes(scene, *tracer, o);
+  ASSERT_TRUE(placed.isOk()) << placed.message();
+  Result<runtime::ProbeTetrahedra> mesh = tetrahedralize(placed->positions);
+  ASSERT_TRUE(mesh.isOk()) << mesh.message();
+  constexpr float kBoundary = 1.55f;
+  std::vector<AxisIrradiance> irradiance(placed->positions.size());
+  for (size_t i = 0; i < irradiance.size(); ++i)
+    irradiance[i].fill(glm::vec3(placed->positions[i].x < kBoundary ? 1.0f : 0.1f));
+
+  auto refine = [&](int threads, size_t maxProbes, Placement& p) {
+    PlacementOptions with = o;
+    with.maxProbes = maxProbes;
+    p = placed.value();
+    setThreadCount(threads);
+    Result<BakeRefinement> r = refineByBake(scene, *tracer, with, mesh.value(), irradiance, {}, p);
+    setThreadCount(0);
+    EXPECT_TRUE(r.isOk()) << r.message();
+    return r ? r.value() : BakeRefinement();
+  };
+  Placement one, two;
+  const BakeRefinement r = refine(1, o.maxProbes, one);
+  refine(2, o.maxProbes, two);
+  ASSERT_EQ(one.positions.size(), two.positions.size());
+  EXPECT_EQ(std::memcmp(one.positions.data(), two.positions.data(),
+                        one.positions.size() * sizeof(glm::vec3)),
+            0);
+
+  const size_t n = placed->positions.size();
+  std::printf("light boundary: %zu edges, %zu too short, %zu across it, %zu probes added, %zu "
+              "rejected\n", r.edges, r.shortEdges, r.overThreshold, r.added, r.rejected);
+  ASSERT_GT(r.added, 10u);
+  ASSERT_EQ(one.positions.size(), n + r.added);
+  EXPECT_EQ(one.refined, placed->refined);
+  const float finest = o.spacing / 4.0f;
+  for (size_t i = n; i < one.positions.size(); ++i) {
+    const glm::vec3 q = one.positions[i];
+    EXPECT_EQ(one.kinds[i], ProbeKind::Refined);
+    // The midpoint of an edge across the boundary, longer than the finest cells' diagonal.
+    bool across = false;
+    for (const glm::ivec4& t : mesh->tetrahedra)
+      for (int a = 0; a < 4 && !across; ++a)
+        for (int b = a + 1; b < 4 && !across; ++b) {
+          const glm::vec3 p0 = placed->positions[size_t(t[a])], p1 = placed->positions[size_t(t[b])];
+          across = 0.5f * (p0 + p1) == q && (p0.x < kBoundary) != (p1.x < kBoundary) &&
+                   glm::distance(p0, p1) > std::sqrt(3.0f) * finest;
+        }
+    EXPECT_TRUE(across) << q.x << " " << q.y << " " << q.z;
+    EXPECT_FALSE(insideBox(q, kBoxLo, kBoxHi)) << q.x << " " << q.y << " " << q.z;
+    EXPECT_GE(surfaceDistance(q), one.margin - 1e-5f) << q.x << " " << q.y << " " << q.z;
+  }
+
+  // A budget of five more probes keeps five, and says what it left out.
+  Placement capped;
+  const BakeRefinement c = refine(0, n + 5, capped);
+  EXPECT_EQ(capped.positions.size(), n + 5);
+  EXPECT_EQ(c.added, 5u);
+  EXPECT_EQ(c.overBudget, r.added - 5);
+  ASSERT_FALSE(capped.warnings.empty());
+  EXPECT_NE(capped.warnings.back().find("--max-probes"), std::string::npos);
 }
 
 TEST(ProbePlacement, Cancelled) {

@@ -1,11 +1,13 @@
-// `afterglow probes place`: light-probe placement (probes::placeProbes), their tetrahedra
-// (probes::tetrahedralize), written as PROBES.json with a picture beside it.
+// `afterglow probes place`: light-probe placement (probes::placeProbes), refined where a bake's
+// light changes with --bake (probes::refineByBake), their tetrahedra (probes::tetrahedralize),
+// written as PROBES.json with a picture beside it. `probes sample` is in cmd_probes_sample.cpp.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,11 +18,13 @@
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/core/progress.h"
+#include "afterglow/probes/bake_refinement.h"
 #include "afterglow/probes/placement.h"
 #include "afterglow/probes/placement_picture.h"
 #include "afterglow/probes/probes_file.h"
 #include "afterglow/probes/tetrahedralize.h"
 #include "args.h"
+#include "baked_probes.h"
 #include "commands.h"
 #include "common.h"
 
@@ -30,18 +34,20 @@ namespace afterglow::cli {
 
 const char kProbesHelp[] =
     "Usage: afterglow probes place SCENE -o PROBES.json [options]\n"
+    "       afterglow probes sample OUT/ --at x,y,z [--at x,y,z ...] [--normal x,y,z] [--json]\n"
     "\n"
-    "Places light probes for dynamic objects: a grid over the static geometry (or over the probe\n"
-    "volumes authored on glTF nodes as extras.afterglow.probeVolume = {\"size\": [x, y, z],\n"
-    "\"spacing\": s}), refined on an octree where it holds or touches geometry, never inside\n"
-    "geometry (a candidate whose rays mostly see the backs of single-sided surfaces is moved to\n"
-    "a free spot in its cell or dropped) and kept a margin off surfaces; then a Delaunay\n"
+    "probes place: places light probes for dynamic objects: a grid over the static geometry (or\n"
+    "over the probe volumes authored on glTF nodes as extras.afterglow.probeVolume = {\"size\":\n"
+    "[x, y, z], \"spacing\": s}), refined on an octree where it holds or touches geometry, never\n"
+    "inside geometry (a candidate whose rays mostly see the backs of single-sided surfaces is\n"
+    "moved to a free spot in its cell or dropped) and kept a margin off surfaces; then a Delaunay\n"
     "tetrahedralisation of the probes for interpolation. Writes, all or nothing:\n"
     "  PROBES.json   positions, kinds (grid, refined, moved, pinned), tetrahedra and their\n"
     "                neighbours, settings and summary (README: the light probes file)\n"
     "  PROBES.png    the probes over the scene from its first camera (or an overview), coloured\n"
     "                by kind: grid white, refined cyan, moved orange, pinned magenta\n"
-    "and prints a summary: candidates, placed, rejected inside geometry, moved, refined, time.\n"
+    "and prints a summary: candidates, placed, rejected inside geometry, moved, refined (and\n"
+    "added by --bake), time.\n"
     "SCENE is a .gltf or .glb file, or a built-in scene: builtin:cornell, builtin:furnace.\n"
     "\n"
     "Options:\n"
@@ -55,10 +61,38 @@ const char kProbesHelp[] =
     "  --add FILE.json           the user's own probes ({\"positions\": [[x, y, z], ...],\n"
     "                            \"names\": [...]}), pinned, never moved; one inside geometry is\n"
     "                            warned about by name\n"
+    "  --bake OUT/               then refine where a bake's light changes: each edge of the\n"
+    "                            probes' tetrahedra whose ends' E/pi (the bake's probes\n"
+    "                            interpolated there, over the six axis normals) differ by more\n"
+    "                            than the threshold gets a probe at its midpoint (kind refined;\n"
+    "                            not inside geometry nor within the margin of a surface), unless\n"
+    "                            it is as short as the finest cells' diagonal already; within\n"
+    "                            --max-probes, the largest differences first; one pass\n"
+    "  --refine-threshold X      the difference that splits an edge (default 0.25), relative to\n"
+    "                            the brighter end (or to 1% of the brightest E/pi, if more)\n"
     "  --width N, --height N     the picture's size (default 960 x 600)\n"
     "  --threads N               worker threads (default: every core); the output is identical\n"
     "                            for any count\n"
     "  --quiet                   no progress and no summary\n"
+    "  -h, --help                this help\n"
+    "\n"
+    "probes sample: prints a bake's light probes interpolated at each --at point (tetrahedral\n"
+    "interpolation, as the runtime's sampleProbes gives an engine's dynamic object there): one\n"
+    "line per point, x,y,z then E/pi (linear RGB, the lightmaps' unit: shade with albedo x\n"
+    "value) for the six axis normals +X -X +Y -Y +Z -Z, or for each --normal given.\n"
+    "OUT/transport.agt is solved as the bake solved it (from scratch, its bounce count from\n"
+    "OUT/report.json), so a point on a probe gives that probe's SH in\n"
+    "OUT/probes/light_probes_sh.bin (deringed alike).\n"
+    "\n"
+    "Options:\n"
+    "  --at x,y,z                a point, metres in the scene's axes; repeatable; required\n"
+    "  --normal x,y,z            a normal to evaluate instead of the six axes; repeatable\n"
+    "  --json                    a JSON array instead, one object per point: position,\n"
+    "                            tetrahedron (-1: none), inside (false: outside the probes' hull,\n"
+    "                            projected onto its nearest face), probes and weights (the\n"
+    "                            interpolation's; -1 and 0 where unused), sh (the radiance SH L2,\n"
+    "                            27 floats as in light_probes_sh.bin: c0.r c0.g c0.b c1.r ...),\n"
+    "                            irradiance ([{normal, value}], E/pi per normal)\n"
     "  -h, --help                this help\n";
 
 namespace {
@@ -71,7 +105,8 @@ int runPlace(int argc, char** argv, int first) {
   Args args;
   if (!args.parse(argc, argv, first,
                   {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"},
-                   {"add"}, {"width"}, {"height"}, {"threads"}, {"quiet", 0, false},
+                   {"add"}, {"bake"}, {"refine-threshold"}, {"width"}, {"height"},
+                   {"threads"}, {"quiet", 0, false},
                    {"help", 'h', false}}))
     return usage(args.error());
   if (args.has("help")) {
@@ -88,6 +123,7 @@ int runPlace(int argc, char** argv, int first) {
     return usage("the output must end in .json, got '" + output + "'");
 
   probes::PlacementOptions options;
+  probes::BakeRefinementOptions refineOptions;
   int threads = 0, width = 960, height = 600, maxProbes = int(options.maxProbes);
   if (!args.getFloat("spacing", 0.0f, 0.0f, 1e6f, &options.spacing) ||
       !args.getInt("levels", options.levels, 0, 8, &options.levels) ||
@@ -95,8 +131,14 @@ int runPlace(int argc, char** argv, int first) {
       !args.getInt("max-probes", maxProbes, 1, 100000000, &maxProbes) ||
       !args.getInt("width", width, 16, 8192, &width) ||
       !args.getInt("height", height, 16, 8192, &height) ||
-      !args.getInt("threads", 0, 0, 1024, &threads))
+      !args.getInt("threads", 0, 0, 1024, &threads) ||
+      !args.getFloat("refine-threshold", refineOptions.threshold, 0.0f, 1e6f,
+                     &refineOptions.threshold))
     return usage(args.error());
+  const std::string bakeDir = args.get("bake");
+  if (args.has("bake") && bakeDir.empty()) return usage("--bake wants a bake folder OUT/");
+  if (args.has("refine-threshold") && bakeDir.empty())
+    return usage("--refine-threshold refines by a bake: give --bake OUT/ too");
   options.maxProbes = size_t(maxProbes);
   const bool quiet = args.has("quiet");
   setThreadCount(threads);
@@ -130,27 +172,80 @@ int runPlace(int argc, char** argv, int first) {
     return kExitBadInput;
   }
 
+  // The bake first, so a wrong folder fails before the placement's work.
+  std::optional<BakedProbes> baked;
+  double bakeSeconds = 0.0;
+  if (!bakeDir.empty()) {
+    const auto bakeStart = Clock::now();
+    Result<BakedProbes> loadedBake = loadBakedProbes(bakeDir);
+    if (interrupted()) return interruptedExit();
+    if (!loadedBake) {
+      printError(loadedBake.message());
+      return kExitBadInput;
+    }
+    baked = std::move(loadedBake.value());
+    bakeSeconds = secondsSince(bakeStart);
+  }
+
   Result<probes::Placement> placed = probes::placeProbes(scene, *tracer.value(), options, progress);
   if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!placed) {
     printError(input + ": " + placed.message());
     return kExitBadInput;
   }
-  const probes::Placement& placement = placed.value();
-  const double placeSeconds = secondsSince(start);
+  probes::Placement& placement = placed.value();
+  const double placeSeconds = secondsSince(start) - bakeSeconds;  // loading included, as before
+
+  auto tetrahedralize = [&]() -> Result<runtime::ProbeTetrahedra> {
+    Result<runtime::ProbeTetrahedra> mesh = probes::tetrahedralize(placement.positions);
+    if (!mesh) return Status::error(input + ": " + mesh.message());
+    return mesh;
+  };
+  const auto tetStart = Clock::now();
+  Result<runtime::ProbeTetrahedra> mesh = tetrahedralize();
+  if (!mesh) {
+    printError(mesh.message());
+    return kExitBadInput;
+  }
+  double tetSeconds = secondsSince(tetStart);
+
+  // --bake: split the edges across which the bake's light changes, then tetrahedralise again.
+  probes::BakeRefinement refinement;
+  if (baked) {
+    const auto bakeStart = Clock::now();
+    // In probe order, each walk starting from the last one's tetrahedron: the same answer on
+    // any thread count (a point on a face shared by two tetrahedra may round differently in
+    // each, so the walk's start must not depend on the threads).
+    std::vector<probes::AxisIrradiance> irradiance(placement.positions.size());
+    int hint = 0;
+    for (size_t i = 0; i < placement.positions.size(); ++i) {
+      const runtime::ShL2 sh = baked->sample(placement.positions[i], &hint);
+      for (int k = 0; k < 6; ++k)
+        irradiance[i][size_t(k)] = runtime::Runtime::evaluateIrradiance(sh, probes::axisNormal(k));
+    }
+    Result<probes::BakeRefinement> refined = probes::refineByBake(
+        scene, *tracer.value(), options, mesh.value(), irradiance, refineOptions, placement);
+    if (!refined) {
+      printError(input + ": " + refined.message());
+      return kExitBadInput;
+    }
+    refinement = refined.value();
+    bakeSeconds += secondsSince(bakeStart);
+    if (refinement.added > 0) {
+      const auto again = Clock::now();
+      mesh = tetrahedralize();
+      if (!mesh) {
+        printError(mesh.message());
+        return kExitBadInput;
+      }
+      tetSeconds += secondsSince(again);
+    }
+  }
 
   // The user's probes are the pinned ones, in their file's order: they take its names.
   std::vector<std::string> names(placement.positions.size());
   for (size_t i = 0, u = 0; i < placement.positions.size() && u < options.userNames.size(); ++i)
     if (placement.kinds[i] == probes::ProbeKind::Pinned) names[i] = options.userNames[u++];
-
-  const auto tetStart = Clock::now();
-  Result<runtime::ProbeTetrahedra> mesh = probes::tetrahedralize(placement.positions);
-  if (!mesh) {
-    printError(input + ": " + mesh.message());
-    return kExitBadInput;
-  }
-  const double tetSeconds = secondsSince(tetStart);
 
   baker::View view = scene.cameras.empty() ? baker::defaultView(scene, 0.9f)
                                            : baker::cameraView(scene.cameras.front());
@@ -160,23 +255,36 @@ int runPlace(int argc, char** argv, int first) {
 
   size_t pinned = 0;
   for (probes::ProbeKind k : placement.kinds) pinned += k == probes::ProbeKind::Pinned;
-  const nlohmann::json settings = {{"input", input},
-                                   {"spacing", placement.spacing},
-                                   {"levels", options.levels},
-                                   {"margin", placement.margin},
-                                   {"maxProbes", options.maxProbes},
-                                   {"add", args.get("add")},
-                                   {"threads", threadCount()}};
-  const nlohmann::json summary = {{"candidates", placement.candidates},
-                                  {"placed", placement.positions.size()},
-                                  {"rejectedInsideGeometry", placement.rejected},
-                                  {"moved", placement.moved},
-                                  {"refined", placement.refined},
-                                  {"pinned", pinned},
-                                  {"tetrahedra", mesh->tetrahedra.size()},
-                                  {"placeSeconds", placeSeconds},
-                                  {"tetrahedraSeconds", tetSeconds},
-                                  {"warnings", placement.warnings}};
+  nlohmann::json settings = {{"input", input},
+                             {"spacing", placement.spacing},
+                             {"levels", options.levels},
+                             {"margin", placement.margin},
+                             {"maxProbes", options.maxProbes},
+                             {"add", args.get("add")},
+                             {"threads", threadCount()}};
+  if (baked) {
+    settings["bake"] = bakeDir;
+    settings["refineThreshold"] = refineOptions.threshold;
+  }
+  nlohmann::json summary = {{"candidates", placement.candidates},
+                            {"placed", placement.positions.size()},
+                            {"rejectedInsideGeometry", placement.rejected},
+                            {"moved", placement.moved},
+                            {"refined", placement.refined},
+                            {"pinned", pinned},
+                            {"refinedByBake", refinement.added},
+                            {"tetrahedra", mesh->tetrahedra.size()},
+                            {"placeSeconds", placeSeconds},
+                            {"tetrahedraSeconds", tetSeconds},
+                            {"warnings", placement.warnings}};
+  if (baked)
+    summary["bakeRefinement"] = {{"edges", refinement.edges},
+                                 {"shortEdges", refinement.shortEdges},
+                                 {"overThreshold", refinement.overThreshold},
+                                 {"rejected", refinement.rejected},
+                                 {"overBudget", refinement.overBudget},
+                                 {"floor", refinement.floor},
+                                 {"seconds", bakeSeconds}};
   const std::string text =
       probes::probesJson(placement, names, mesh.value(), settings.dump(), summary.dump());
 
@@ -204,11 +312,22 @@ int runPlace(int argc, char** argv, int first) {
                 double(placement.spacing), options.spacing > 0.0f ? "" : " (from the level's size)",
                 options.levels, double(placement.margin));
     std::printf("candidates    %zu\n", placement.candidates);
-    std::printf("placed        %zu (%zu refined, %zu moved, %zu pinned)\n",
-                placement.positions.size(), placement.refined, placement.moved, pinned);
+    std::printf("placed        %zu (%zu refined,%s %zu moved, %zu pinned)\n",
+                placement.positions.size(), placement.refined,
+                baked ? format(" %zu by the bake,", refinement.added).c_str() : "",
+                placement.moved, pinned);
     std::printf("rejected      %zu inside geometry\n", placement.rejected);
+    if (baked)
+      std::printf("bake          %zu probes added: %zu of %zu edges differ by more than %.3g in "
+                  "%s (%zu at the finest spacing already); %zu midpoints near geometry or on a "
+                  "probe, %zu over the budget\n",
+                  refinement.added, refinement.overThreshold, refinement.edges,
+                  double(refineOptions.threshold), bakeDir.c_str(), refinement.shortEdges,
+                  refinement.rejected, refinement.overBudget);
     std::printf("tetrahedra    %zu\n", mesh->tetrahedra.size());
-    std::printf("time          place %.2f s, tetrahedra %.2f s\n", placeSeconds, tetSeconds);
+    std::printf("time          place %.2f s,%s tetrahedra %.2f s\n", placeSeconds,
+                baked ? format(" bake refinement %.2f s,", bakeSeconds).c_str() : "",
+                tetSeconds);
     for (const std::string& w : scene.warnings) std::printf("warning       %s\n", w.c_str());
     for (const std::string& w : placement.warnings) std::printf("warning       %s\n", w.c_str());
     std::printf("wrote         %s, %s\n", output.c_str(), picturePath.c_str());
@@ -221,13 +340,14 @@ int runPlace(int argc, char** argv, int first) {
 int runProbes(int argc, char** argv, int first) {
   const std::string verb = first < argc ? argv[first] : "";
   if (verb == "place") return runPlace(argc, argv, first + 1);
+  if (verb == "sample") return runProbesSample(argc, argv, first + 1);
   if (verb == "-h" || verb == "--help" || verb == "help") {
     std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
     return kExitOk;
   }
-  printError(verb.empty() ? "probes: missing a verb: place (see afterglow probes --help)"
+  printError(verb.empty() ? "probes: missing a verb: place or sample (see afterglow probes --help)"
                           : "probes: unknown verb '" + verb +
-                                "', there is place (see afterglow probes --help)");
+                                "', there are place and sample (see afterglow probes --help)");
   return kExitUsage;
 }
 

@@ -17,6 +17,8 @@
 #include "afterglow/baker/clusters.h"
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/status.h"
+#include "afterglow/probes/probes_file.h"
+#include "afterglow/runtime/probe_sh_file.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/scenes/gltf.h"
 #include "args.h"
@@ -34,8 +36,10 @@ const char kRelightHelp[] =
     "Re-solves the bounced light of a bake from its transport file (OUT/transport.agt) with\n"
     "changed settings, as an engine does at run time, and writes RELIT/lightmaps/*.exr and\n"
     "*.png, RELIT/scene.gltf (OUT's, with the changed lights and materials) and\n"
-    "RELIT/report.json, so 'afterglow render RELIT/scene.gltf' shows the result. Options that\n"
-    "name a light or material may repeat; NAME may also be #INDEX.\n"
+    "RELIT/report.json, so 'afterglow render RELIT/scene.gltf' shows the result, and the relit\n"
+    "light probes: RELIT/probes/light_probes.json (OUT's, its settings noting the relight) and\n"
+    "RELIT/probes/light_probes_sh.bin. Options that name a light or material may repeat; NAME\n"
+    "may also be #INDEX.\n"
     "\n"
     "Options:\n"
     "  -o, --output RELIT/          output folder (required)\n"
@@ -155,6 +159,57 @@ struct MaterialMap {
     return &lightmap["extras"]["afterglow"];
   }
 };
+
+// The relit light probes' two files: OUT/probes/light_probes.json as the bake wrote it (the
+// placement: positions, kinds, names, tetrahedra), its settings noting the relight under
+// "relight", and the runtime's relit SH, deringed with the window the bake's SH were.
+struct RelitProbes {
+  std::string text;  // empty: OUT has no probes file to relight (a warning says so)
+  std::string sh;
+};
+
+Result<RelitProbes> relightProbes(const fs::path& in, const runtime::Runtime& rt,
+                                  const json& relightNote, std::vector<std::string>& warnings) {
+  const std::string path = (in / "probes" / "light_probes.json").string();
+  RelitProbes out;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) {
+    warnings.push_back(format("the transport has %d light probes but %s is missing; the relit "
+                              "probes are not written", rt.probeCount(), path.c_str()));
+    return out;
+  }
+  Result<std::string> text = readFile(path);
+  if (!text) return text.status();
+  // Checked as `bake --probes` checks it, and against the transport it was baked with.
+  Result<probes::ProbesFile> file = probes::parseProbesFile(text.value(), path);
+  if (!file) return file.status();
+  if (file->positions.size() != size_t(rt.probeCount()))
+    return Status::error(format("%s: %zu probes, but the transport has %d", path.c_str(),
+                                file->positions.size(), rt.probeCount()));
+  for (int i = 0; i < rt.probeCount(); ++i)
+    if (file->positions[size_t(i)] != rt.probePosition(i))
+      return Status::error(format("%s: probe %d is not where the transport's is", path.c_str(), i));
+  json doc = json::parse(text.value());
+  const json sh = doc.value("sh", json::object());
+  const json window = sh.is_object() ? sh.value("deringWindow", json(0.0)) : json(0.0);
+  if (!window.is_number() || !(window.get<double>() >= 0.0) || !(window.get<double>() < 1e6))
+    return Status::error(path + ": sh.deringWindow is not a window: " + window.dump());
+  if (!doc["settings"].is_object()) doc["settings"] = json::object();
+  doc["settings"]["relight"] = relightNote;
+
+  runtime::ProbeShFile shFile;
+  shFile.deringWindow = window.get<float>();
+  shFile.sh.resize(size_t(rt.probeCount()));
+  for (int i = 0; i < rt.probeCount(); ++i) {
+    rt.probeSh(i, &shFile.sh[size_t(i)]);
+    if (shFile.deringWindow > 0.0f)
+      shFile.sh[size_t(i)] = runtime::deringed(shFile.sh[size_t(i)], shFile.deringWindow);
+  }
+  const std::vector<uint8_t> bytes = runtime::serializeProbeSh(shFile);
+  out.text = doc.dump() + "\n";
+  out.sh.assign(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  return out;
+}
 
 MaterialMap mapMaterials(const json& gltf, int transportMaterials) {
   MaterialMap map;
@@ -423,6 +478,20 @@ int runRelight(int argc, char** argv, int first) {
   const runtime::UpdateStats stats = rt->update(update);
   if (interrupted()) return interruptedExit();
 
+  std::optional<RelitProbes> relitProbes;
+  if (rt->probeCount() > 0) {
+    const json note = {{"from", fs::absolute(in).string()},
+                       {"changes", changes},
+                       {"bounces", stats.bounces},
+                       {"converged", stats.converged}};
+    Result<RelitProbes> made = relightProbes(in, *rt, note, warnings);
+    if (!made) {
+      printError(made.message());
+      return kExitBadInput;
+    }
+    if (!made->text.empty()) relitProbes = std::move(made.value());
+  }
+
   AtomicOutput files;
   std::vector<glm::vec3> image;
   json atlases = json::array();
@@ -467,10 +536,16 @@ int runRelight(int argc, char** argv, int first) {
       }
       if (s = files.write((outDir / uri).string(), bytes.value()); !s) break;
     }
+  if (s && relitProbes) {
+    const fs::path dir = outDir / "probes";
+    s = files.write((dir / "light_probes.json").string(), relitProbes->text);
+    if (s) s = files.write((dir / "light_probes_sh.bin").string(), relitProbes->sh);
+  }
   report["relight"] = {{"from", fs::absolute(in).string()},
                        {"changes", changes},
                        {"bounces", stats.bounces},
                        {"converged", stats.converged},
+                       {"probes", relitProbes ? rt->probeCount() : 0},
                        {"loadSeconds", loadSeconds},
                        {"updateMilliseconds", stats.milliseconds},
                        {"warnings", warnings}};
@@ -488,7 +563,8 @@ int runRelight(int argc, char** argv, int first) {
                 rt->materialCount());
     std::printf("solved        %d bounces%s in %.1f ms\n", stats.bounces,
                 stats.converged ? " (converged)" : "", stats.milliseconds);
-    std::printf("wrote         %s (%d atlases)\n", outDir.string().c_str(), rt->atlasCount());
+    std::printf("wrote         %s (%d atlases, %d light probes)\n", outDir.string().c_str(),
+                rt->atlasCount(), relitProbes ? rt->probeCount() : 0);
     for (const std::string& w : warnings) std::printf("warning       %s\n", w.c_str());
   }
   return kExitOk;

@@ -10,6 +10,7 @@ int runBake(int argc, char** argv, int first);
 int runRender(int argc, char** argv, int first);
 int runRelight(int argc, char** argv, int first);
 int runProbes(int argc, char** argv, int first);
+int runProbesSample(int argc, char** argv, int first);  // `probes sample`, from runProbes
 
 // Help texts (printed by --help, and after a usage error hint).
 extern const char kUvHelp[];

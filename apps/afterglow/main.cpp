@@ -34,6 +34,8 @@ const char kMainHelp[] =
     "                         sky, albedo or emission (the runtime's re-solve)\n"
     "  probes place SCENE -o PROBES.json\n"
     "                         place light probes and tetrahedralise them\n"
+    "  probes sample OUT/ --at x,y,z\n"
+    "                         a bake's light probes interpolated at points (E/pi, SH)\n"
     "\n"
     "SCENE is a .gltf or .glb file, or a built-in scene: builtin:cornell, builtin:furnace.\n"
     "Run 'afterglow COMMAND --help' for a command's options.\n"

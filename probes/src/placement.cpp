@@ -651,4 +651,19 @@ Result<Placement> placeProbes(const scenes::Scene& scene, const baker::RayTracer
   return placement;
 }
 
+std::vector<uint8_t> freeProbePositions(const scenes::Scene& scene, const baker::RayTracer& tracer,
+                                        const std::vector<glm::vec3>& points, float margin,
+                                        const PlacementOptions& options) {
+  const Prober prober(scene, tracer, std::max(options.rays, 1), options.insideFraction);
+  std::vector<uint8_t> clear(points.size(), 0);
+  // As settle() keeps a candidate: outside (by the clear margin a move needs: these points lie
+  // between probes, often near the geometry that made their light differ) and off surfaces.
+  parallelFor(points.size(), [&](size_t i) {
+    if (!finite(points[i])) return;
+    const Look look = prober.look(points[i], kMarginReach * margin);
+    clear[i] = prober.clearlyOutside(look) && look.nearest >= 0.999f * margin;
+  }, 64);
+  return clear;
+}
+
 }  // namespace afterglow::probes

@@ -65,4 +65,12 @@ Result<Placement> placeProbes(const scenes::Scene& scene, const baker::RayTracer
                               const PlacementOptions& options = {},
                               Progress& progress = nullProgress());
 
+// The placement's own tests for probes added after it (`probes place --bake` splits edges),
+// none moved: 1 where a probe at points[i] is clearly outside geometry (its options.rays rays see
+// back faces less often than a moved candidate may) and at least `margin` off every surface its
+// rays find, else 0. Deterministic for any thread count.
+std::vector<uint8_t> freeProbePositions(const scenes::Scene& scene, const baker::RayTracer& tracer,
+                                        const std::vector<glm::vec3>& points, float margin,
+                                        const PlacementOptions& options = {});
+
 }  // namespace afterglow::probes

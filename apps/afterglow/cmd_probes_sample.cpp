@@ -1,0 +1,120 @@
+// `afterglow probes sample OUT/ --at x,y,z`: the bake's light probes interpolated at points, as
+// an engine's dynamic object there would be lit (runtime::Runtime::sampleProbes), as E/π per
+// normal or, with --json, with the tetrahedron, weights and SH for scripts.
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "afterglow/runtime/probe_tetrahedra.h"
+#include "args.h"
+#include "baked_probes.h"
+#include "commands.h"
+#include "common.h"
+
+using nlohmann::json;
+
+namespace afterglow::cli {
+
+namespace {
+
+struct Normal {
+  std::string label;  // "+X" ... for the default axes, "" for a given one
+  glm::vec3 n;
+};
+
+std::string vecText(glm::vec3 v) {
+  return format("%.6g,%.6g,%.6g", double(v.x), double(v.y), double(v.z));
+}
+
+}  // namespace
+
+int runProbesSample(int argc, char** argv, int first) {
+  auto usage = [](const std::string& message) {
+    printError("probes sample: " + message + " (see afterglow probes --help)");
+    return int(kExitUsage);
+  };
+  Args args;
+  if (!args.parse(argc, argv, first,
+                  {{"at"}, {"normal"}, {"json", 0, false}, {"help", 'h', false}}))
+    return usage(args.error());
+  if (args.has("help")) {
+    std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
+    return kExitOk;
+  }
+  if (args.positional().empty()) return usage("missing the bake folder OUT/");
+  if (args.positional().size() > 1)
+    return usage("one bake folder only, got '" + args.positional()[1] + "' too");
+  const std::string outDir = args.positional()[0];
+  std::vector<glm::vec3> points;
+  for (const std::string& a : args.getAll("at")) {
+    glm::vec3 p;
+    if (!parseVec3(a, &p)) return usage("--at wants x,y,z (metres), got '" + a + "'");
+    points.push_back(p);
+  }
+  if (points.empty()) return usage("missing --at x,y,z");
+  std::vector<Normal> normals;
+  for (const std::string& a : args.getAll("normal")) {
+    glm::vec3 n;
+    const float len = parseVec3(a, &n) ? glm::length(n) : 0.0f;
+    if (!(len > 0.0f) || !std::isfinite(len))
+      return usage("--normal wants a non-zero x,y,z, got '" + a + "'");
+    normals.push_back({"", n / len});
+  }
+  if (normals.empty())
+    normals = {{"+X", {1, 0, 0}}, {"-X", {-1, 0, 0}}, {"+Y", {0, 1, 0}},
+               {"-Y", {0, -1, 0}}, {"+Z", {0, 0, 1}}, {"-Z", {0, 0, -1}}};
+
+  Result<BakedProbes> loaded = loadBakedProbes(outDir);
+  if (interrupted()) return interruptedExit();
+  if (!loaded) {
+    printError(loaded.message());
+    return kExitBadInput;
+  }
+  const BakedProbes& baked = loaded.value();
+  const runtime::ProbeTetrahedra& mesh = baked.runtime->data().probes.mesh;
+
+  json all = json::array();
+  for (const glm::vec3 p : points) {
+    // Each point walks from the first tetrahedron, so its answer does not depend on the others.
+    int hint = 0;
+    const runtime::ShL2 sh = baked.sample(p, &hint);
+    const runtime::ProbeLocation where = runtime::locateProbe(mesh, p, 0);
+    std::vector<glm::vec3> values;
+    for (const Normal& n : normals) values.push_back(runtime::Runtime::evaluateIrradiance(sh, n.n));
+    if (!args.has("json")) {
+      std::string line = vecText(p);
+      for (size_t k = 0; k < normals.size(); ++k)
+        line += "  " + (normals[k].label.empty() ? "n=" + vecText(normals[k].n) : normals[k].label) +
+                " " + vecText(values[k]);
+      if (!where.inside) line += "  (outside the probes' hull)";
+      std::printf("%s\n", line.c_str());
+      continue;
+    }
+    json coefficients = json::array(), irradiance = json::array();
+    for (const glm::vec3& c : sh.c)
+      for (int k = 0; k < 3; ++k) coefficients.push_back(c[k]);
+    for (size_t k = 0; k < normals.size(); ++k)
+      irradiance.push_back({{"normal", {normals[k].n.x, normals[k].n.y, normals[k].n.z}},
+                            {"value", {values[k].r, values[k].g, values[k].b}}});
+    all.push_back({{"position", {p.x, p.y, p.z}},
+                   {"tetrahedron", where.tetrahedron},
+                   {"inside", where.inside},
+                   {"probes", {where.probes.x, where.probes.y, where.probes.z, where.probes.w}},
+                   {"weights", {where.weights.x, where.weights.y, where.weights.z, where.weights.w}},
+                   {"sh", coefficients},
+                   {"irradiance", irradiance}});
+  }
+  // One point's object a line: readable, and still one JSON array.
+  if (args.has("json")) {
+    std::printf("[");
+    for (size_t i = 0; i < all.size(); ++i)
+      std::printf("%s\n%s", i ? "," : "", all[i].dump().c_str());
+    std::printf("\n]\n");
+  }
+  return kExitOk;
+}
+
+}  // namespace afterglow::cli
