@@ -2,7 +2,9 @@
 // against answers known without the baker: the glTF furnace (Le / (1 − ρ) from every
 // direction), a probe in the open under a constant sky (E/π = L for every normal), one
 // directional light (its clamped cosine's SH), the Cornell box against the reference path
-// tracer at free points, and the runtime's relit probes against a fresh bake's.
+// tracer at free points; the probes the same for any thread count, sampled at their own
+// positions, and refreshed alone within a budget. (Relit probes against a fresh bake's:
+// relight_test.cpp through the API, cli_relight_test.cpp through the CLI.)
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
