@@ -138,31 +138,31 @@ struct Candidate {
 // Farthest-point picks over `pool` (in probe order), adding to `picked` until it holds `count`.
 // The picture's edges count as picked at half the distance (as a grid's cells have their
 // centres half a step from its border): plain farthest-point picks crowd the edges and corners.
+// Each candidate keeps its distance to the nearest pick, updated per pick: O(count × pool).
 void pickSpread(const std::vector<Candidate>& pool, glm::vec2 pictureSize, size_t count,
                 std::vector<Candidate>& picked) {
   const glm::vec2 pictureCentre = 0.5f * pictureSize;
-  std::vector<bool> used(pool.size(), false);
+  std::vector<float> nearest(pool.size(), std::numeric_limits<float>::infinity());
+  std::vector<bool> used(pool.size(), false);  // picked, or overlapping a pick
+  auto take = [&](const Candidate& p) {
+    for (size_t i = 0; i < pool.size(); ++i) {
+      const float d = glm::length(pool[i].centre - p.centre);
+      nearest[i] = std::min(nearest[i], d);
+      // Once it overlaps a pick it always will.
+      if (d <= pool[i].radiusPx + p.radiusPx + 1.0f) used[i] = true;
+    }
+  };
+  for (const Candidate& p : picked) take(p);
   while (picked.size() < count) {
     int best = -1;
     float bestScore = 0.0f;
     for (size_t i = 0; i < pool.size(); ++i) {
       if (used[i]) continue;
       const Candidate& c = pool[i];
-      bool overlaps = false;
-      float nearest = std::numeric_limits<float>::infinity();
-      for (const Candidate& p : picked) {
-        const float d = glm::length(c.centre - p.centre);
-        overlaps |= d <= c.radiusPx + p.radiusPx + 1.0f;
-        nearest = std::min(nearest, d);
-      }
-      if (overlaps) {
-        used[i] = true;  // it only gets closer to the picked ones as more are picked
-        continue;
-      }
       // Nothing picked yet: the one nearest the centre (the largest negated distance).
       const glm::vec2 edge = glm::min(c.centre, pictureSize - c.centre);
       const float score = picked.empty() ? -glm::length(c.centre - pictureCentre)
-                                         : std::min(nearest, 2.0f * std::min(edge.x, edge.y));
+                                         : std::min(nearest[i], 2.0f * std::min(edge.x, edge.y));
       // Ties (spheres one behind another on the picture) go to the larger, then the first.
       if (best < 0 || score > bestScore ||
           (score == bestScore && c.radiusPx > pool[size_t(best)].radiusPx)) {
@@ -171,8 +171,8 @@ void pickSpread(const std::vector<Candidate>& pool, glm::vec2 pictureSize, size_
       }
     }
     if (best < 0) return;
-    used[size_t(best)] = true;
     picked.push_back(pool[size_t(best)]);
+    take(picked.back());
   }
 }
 
