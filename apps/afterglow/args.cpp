@@ -49,7 +49,9 @@ bool Args::parse(int argc, char** argv, int first, const std::vector<OptionSpec>
       values_[spec->name] = "1";
       continue;
     }
-    if (!inlineValue) {
+    if (!inlineValue && spec->optionalValue) {
+      if (i + 1 < argc && spec->optionalValue(argv[i + 1])) value = argv[++i];
+    } else if (!inlineValue) {
       if (i + 1 >= argc) {
         error_ = format("option '%s' needs a value", arg.c_str());
         return false;

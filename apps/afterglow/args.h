@@ -1,5 +1,6 @@
 // Hand-written command-line parsing for the afterglow subcommands: options as `--name value`,
-// `--name=value` or a short alias, flags without a value, and positional arguments.
+// `--name=value` or a short alias, flags without a value, options whose value may be left out,
+// and positional arguments.
 #pragma once
 
 #include <map>
@@ -21,6 +22,10 @@ struct OptionSpec {
   std::string name;       // long name without dashes, e.g. "texels-per-unit"
   char shortName = 0;     // e.g. 'o'; 0 = none
   bool takesValue = true; // false for flags such as --quiet
+  // For an option whose value may be left out (`--probe-spheres [N|all]`): the next argument
+  // is its value only when this accepts it; otherwise the option stands alone with value "".
+  // (--name=value always gives the value.)
+  bool (*optionalValue)(const std::string& next) = nullptr;
 };
 
 class Args {

@@ -1,15 +1,20 @@
 // afterglow render: a ray-traced picture of a baked scene (albedo × lightmap + emission), or
 // with --reference a path-traced picture of the same view to compare it with.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 #include <string>
 
+#include "afterglow/baker/probe_spheres.h"
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/render.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/probes/probes_file.h"
+#include "afterglow/runtime/probe_sh_file.h"
 #include "afterglow/scenes/gltf.h"
 #include "args.h"
 #include "commands.h"
@@ -42,6 +47,15 @@ const char kRenderHelp[] =
     "  --width N, --height N    picture size in pixels (default 640 x 480)\n"
     "  --exposure X             scale by 2^X before tone mapping (default: automatic, the\n"
     "                           99th percentile maps to 0.8); PNG only\n"
+    "  --probe-spheres [N|all]  draw white diffuse spheres (albedo 0.8) lit by the light probes\n"
+    "                           the bake wrote (SCENE's folder/probes/): what a dynamic object\n"
+    "                           would receive there, shaded 0.8 x E/pi with the probes sampled\n"
+    "                           at each sphere's centre. N (default 8): spheres at probes the\n"
+    "                           camera sees, picked far apart on the picture, each 2/5 of the\n"
+    "                           distance to its probe's nearest neighbour in radius; 'all': one\n"
+    "                           at every probe, 1/5 of the probes' median spacing. Spheres keep\n"
+    "                           clear of the walls beside them, hide what is behind them and\n"
+    "                           cast no shadows (they are not in the bake); not with --reference\n"
     "  --reference              path-trace the view instead of reading the lightmaps (slow)\n"
     "  --spp N                  paths per pixel for --reference (default 256)\n"
     "  --threads N              worker threads (default: every core); the picture is\n"
@@ -91,6 +105,70 @@ int loadShading(const std::string& input, const scenes::Scene& scene, bool refer
   return kExitOk;
 }
 
+// --probe-spheres takes the next argument as its count only when it is one (a number or
+// "all"), so `--probe-spheres SCENE.gltf` leaves the scene where it is.
+bool isSphereCount(const std::string& next) {
+  const bool digits = !next.empty() && std::all_of(next.begin(), next.end(), [](char c) {
+    return c >= '0' && c <= '9';
+  });
+  return digits || next == "all";
+}
+
+// The light probes `afterglow bake` wrote beside the scene: OUT/probes/light_probes.json (the
+// positions and tetrahedra) and light_probes_sh.bin (their SH, in the same order). Errors name
+// the file.
+Result<baker::LightProbes> loadLightProbes(const std::string& gltfPath) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(gltfPath).parent_path() / "probes";
+  const std::string json = (dir / "light_probes.json").string();
+  const std::string bin = (dir / "light_probes_sh.bin").string();
+  std::error_code ec;
+  for (const std::string& path : {json, bin})
+    if (!fs::is_regular_file(path, ec))
+      return Status::error(path + ": no such file; --probe-spheres reads the light probes "
+                           "afterglow bake writes beside the scene.gltf (not with --probes none)");
+  Result<probes::ProbesFile> file = probes::readProbesFile(json);
+  if (!file) return file.status();
+  runtime::ProbeShFile sh;
+  std::string error;
+  if (!runtime::readProbeSh(bin, sh, &error)) return Status::error(error);
+  if (sh.sh.size() != file->positions.size())
+    return Status::error(format("%s: %zu probes' SH for the %zu probes of %s", bin.c_str(),
+                                sh.sh.size(), file->positions.size(), json.c_str()));
+  baker::LightProbes out;
+  out.mesh = std::move(file->mesh);
+  out.sh = std::move(sh.sh);
+  return out;
+}
+
+// Which probes got spheres, so that a sphere in the picture can be traced to its probe.
+void printSpheres(const std::vector<baker::ProbeSphere>& spheres, int count, size_t probes) {
+  if (spheres.empty()) {
+    std::printf("note          no light probe is in view: the picture has no probe spheres\n");
+    return;
+  }
+  float lo = spheres.front().radius, hi = lo;
+  for (const baker::ProbeSphere& s : spheres) {
+    lo = std::min(lo, s.radius);
+    hi = std::max(hi, s.radius);
+  }
+  const std::string radius = lo == hi
+                                 ? format("radius %.3g m", double(lo))
+                                 : format("radius %.3g-%.3g m", double(lo), double(hi));
+  const double albedo = double(baker::kProbeSphereAlbedo);
+  if (count == 0) {
+    std::printf("spheres       at every probe: %zu of %zu may show in this view (%s, albedo "
+                "%.1f)\n",
+                spheres.size(), probes, radius.c_str(), albedo);
+    return;
+  }
+  std::string which;
+  for (const baker::ProbeSphere& s : spheres)
+    which += (which.empty() ? "" : ", ") + std::to_string(s.probe);
+  std::printf("spheres       %zu at probes %s (%s, albedo %.1f)\n", spheres.size(), which.c_str(),
+              radius.c_str(), albedo);
+}
+
 }  // namespace
 
 int runRender(int argc, char** argv, int first) {
@@ -110,6 +188,7 @@ int runRender(int argc, char** argv, int first) {
                    {"exposure"},
                    {"threads"},
                    {"reference", 0, false},
+                   {"probe-spheres", 0, true, isSphereCount},
                    {"spp"},
                    {"quiet", 0, false},
                    {"help", 'h', false}}))
@@ -141,6 +220,24 @@ int runRender(int argc, char** argv, int first) {
     return usage(args.error());
   if (args.has("exposure") && exr)
     return usage("--exposure sets the PNG's tone mapping; an EXR holds the picture unscaled");
+  // 0 = a sphere at every probe.
+  int sphereCount = -1;
+  if (args.has("probe-spheres")) {
+    const std::string value = args.get("probe-spheres");
+    if (value == "all") {
+      sphereCount = 0;
+    } else if (value.empty()) {
+      sphereCount = 8;
+    } else if (!args.getInt("probe-spheres", 8, 1, 100000, &sphereCount)) {
+      return usage(args.error() + " (or 'all')");
+    }
+    if (args.has("reference"))
+      return usage("--probe-spheres draws into the baked view; the --reference path tracer "
+                   "has no probes");
+    if (isBuiltinScene(input))
+      return usage("--probe-spheres reads the light probes afterglow bake wrote beside the "
+                   "scene; render the scene.gltf it wrote, not " + input);
+  }
   glm::vec3 from(0.0f), at(0.0f);
   const bool lookAt = args.has("look-from") || args.has("look-at");
   if (lookAt) {
@@ -171,6 +268,15 @@ int runRender(int argc, char** argv, int first) {
   if (int code = loadShading(input, scene, reference, quiet, &environment, &lightmaps);
       code != kExitOk)
     return code;
+  baker::LightProbes lightProbes;
+  if (sphereCount >= 0) {
+    Result<baker::LightProbes> probes = loadLightProbes(input);
+    if (!probes) {
+      printError(probes.message());
+      return kExitBadInput;
+    }
+    lightProbes = std::move(probes.value());
+  }
   if (interrupted()) return interruptedExit();
 
   const float fovRad = fovDeg * 3.14159265f / 180.0f;
@@ -203,10 +309,22 @@ int runRender(int argc, char** argv, int first) {
     printError(tracer.message());
     return kExitBadInput;
   }
+  std::vector<baker::ProbeSphere> spheres;
+  if (sphereCount >= 0) {
+    Result<std::vector<baker::ProbeSphere>> chosen = baker::chooseProbeSpheres(
+        *tracer.value(), lightProbes, view, options.width, options.height, sphereCount);
+    if (!chosen) {
+      printError(input + ": light probes: " + chosen.message());
+      return kExitBadInput;
+    }
+    spheres = std::move(chosen.value());
+    if (!quiet) printSpheres(spheres, sphereCount, lightProbes.sh.size());
+  }
   Result<std::vector<glm::vec3>> image =
       reference ? baker::renderReference(scene, *tracer.value(), environment, view, options, spp,
                                          progress)
-                : baker::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress);
+                : baker::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress,
+                                     spheres);
   if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!image) {
     printError(image.message());
@@ -222,7 +340,10 @@ int runRender(int argc, char** argv, int first) {
   if (!quiet) {
     const std::string how =
         reference ? format("reference: path traced, %d paths per pixel", spp)
-                  : std::string("baked: albedo x lightmap + emission");
+                  : std::string("baked: albedo x lightmap + emission") +
+                        (spheres.empty() ? ""
+                                         : format(", probe spheres %.1f x E/pi",
+                                                  double(baker::kProbeSphereAlbedo)));
     std::printf("wrote         %s (%dx%d, %s)\n", output.c_str(), options.width, options.height,
                 how.c_str());
   }

@@ -91,12 +91,11 @@ Result<std::vector<glm::vec3>> renderPixels(const View& view, const RenderOption
   return image;
 }
 
-// What the baked render shows along one primary ray: diffuse albedo × lightmap + emission.
+// What the baked render shows at a primary ray's hit: diffuse albedo × lightmap + emission.
 // Back faces of single-sided geometry and misses are black; surfaces without a lightmap
 // (dynamic instances) show only their emission.
 glm::vec3 bakedRadiance(const scenes::Scene& scene, const RayTracer& tracer,
-                        const std::vector<LightmapImage>& lightmaps, const Ray& ray) {
-  const Hit hit = tracer.intersect(ray);
+                        const std::vector<LightmapImage>& lightmaps, const Hit& hit) {
   if (!hit.valid()) return glm::vec3(0.0f);
   const scenes::Instance& inst = scene.instances[hit.instance];
   const int material = scene.meshes[size_t(inst.mesh)].primitives[hit.primitive].material;
@@ -242,17 +241,25 @@ Result<std::vector<LightmapImage>> loadBakedLightmaps(const std::string& gltfPat
 Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const RayTracer& tracer,
                                            const std::vector<LightmapImage>& lightmaps,
                                            const View& view, const RenderOptions& options,
-                                           Progress& progress) {
+                                           Progress& progress,
+                                           const std::vector<ProbeSphere>& spheres) {
   const int spa = std::max(1, options.samplesPerAxis);
+  const ProbeSphereIndex sphereIndex(spheres, view, options.width, options.height);
   return renderPixels(view, options, "render", progress,
                       [&](const PinholeCamera& camera, int px, int py) {
     // A fixed grid: the picture of a bake has no noise of its own.
     glm::vec3 sum(0.0f);
     for (int sy = 0; sy < spa; ++sy)
-      for (int sx = 0; sx < spa; ++sx)
-        sum += bakedRadiance(scene, tracer, lightmaps,
-                             camera.ray(float(px) + (float(sx) + 0.5f) / float(spa),
-                                        float(py) + (float(sy) + 0.5f) / float(spa)));
+      for (int sx = 0; sx < spa; ++sx) {
+        const Ray ray = camera.ray(float(px) + (float(sx) + 0.5f) / float(spa),
+                                   float(py) + (float(sy) + 0.5f) / float(spa));
+        const Hit hit = tracer.intersect(ray);
+        glm::vec3 sphere;
+        if (!sphereIndex.empty() && sphereIndex.shade(ray, px, py, hit.t, &sphere))
+          sum += sphere;
+        else
+          sum += bakedRadiance(scene, tracer, lightmaps, hit);
+      }
     return sum / float(spa * spa);
   });
 }

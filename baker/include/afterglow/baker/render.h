@@ -11,6 +11,7 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/baker/probe_spheres.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
@@ -63,11 +64,14 @@ Result<LightmapImage> readLinearImage(const std::string& path);
 // extras.afterglow.exr), indexed by atlas. Errors name the file.
 Result<std::vector<LightmapImage>> loadBakedLightmaps(const std::string& gltfPath);
 
-// Renders the scene; returns width*height linear RGB, row 0 at the top of the picture.
+// Renders the scene; returns width*height linear RGB, row 0 at the top of the picture. With
+// `spheres` (probe_spheres.h), each is drawn lit by its probes, in front of or behind the scene
+// as it lies, without shadows on the scene.
 Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const RayTracer& tracer,
                                            const std::vector<LightmapImage>& lightmaps,
                                            const View& view, const RenderOptions& options = {},
-                                           Progress& progress = nullProgress());
+                                           Progress& progress = nullProgress(),
+                                           const std::vector<ProbeSphere>& spheres = {});
 
 // The same view path-traced (reference.h): every pixel averages `samplesPerPixel` camera rays
 // through stratified jittered points of the pixel, each shaded as a bake is rendered (emission +
