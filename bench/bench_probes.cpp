@@ -34,10 +34,12 @@ int benchProbes(int argc, char** argv) {
     else if (arg == "--repeat") repeat = std::max(1, int(next()));
     else if (arg == "--rays-side") probeOptions.raysSide = int(next());
     else if (arg == "--regions-side") probeOptions.binsSide = int(next());
+    else if (arg == "--far-distance") probeOptions.farDistance = float(next());
     else if (!arg.empty() && arg[0] != '-') path = arg;
     else
       return fail("unknown option " + arg +
-                  " (--texels-per-unit N, --threads N, --repeat N, --rays-side N, --regions-side N)");
+                  " (--texels-per-unit N, --threads N, --repeat N, --rays-side N, --regions-side N, "
+                  "--far-distance X)");
   }
   setThreadCount(threads);
   Result<scenes::Scene> loaded = loadBenchScene(path);

@@ -199,7 +199,11 @@ class GatherBatch {
 
   // Traces the rays queued since the last trace(); with `lookup`, also finds the texel each
   // hit lands on (codes()), without, only what summarize() needs.
-  void trace(const RayTracer& tracer, const TexelSet& texels, const TexelLookup* lookup) {
+  // With `sightLines` off, a hit on a texel near other geometry takes that texel without the
+  // check that its sample is in sight (TexelOfHit): cheaper, for rays whose hits are averaged
+  // over many directions anyway (the light probes').
+  void trace(const RayTracer& tracer, const TexelSet& texels, const TexelLookup* lookup,
+             bool sightLines = true) {
     const size_t first = codes_.size(), count = rays_.size() - first;
     hits_.resize(rays_.size());
     codes_.resize(rays_.size(), TexelGather::kNoHit);
@@ -240,6 +244,10 @@ class GatherBatch {
       const uint32_t entry = lookup->resolve(scene, hits_[k].instance, uvs_[k], slots_[k]);
       if (entry == runtime::kNoTexel || !(entry & TexelLookup::kNear)) {
         code(k, entry);
+        continue;
+      }
+      if (!sightLines) {
+        code(k, entry & ~TexelLookup::kNear);
         continue;
       }
       const uint32_t t = entry & ~TexelLookup::kNear;

@@ -42,44 +42,21 @@ glm::vec3 probeDirection(glm::vec2 square) {
 
 namespace {
 
-// ∫_b Y_i dω per region b (blocks of binsSide × binsSide regions over the octahedral square),
-// by the midpoint rule on a fine grid (64² points a region: each cell's solid angle is exact,
-// the error is Y's variation inside a cell, far below a half float's precision).
-std::vector<float> regionIntegrals(int binsSide) {
-  constexpr int kFine = 64;
-  std::vector<float> out(size_t(binsSide) * size_t(binsSide) * kShCount, 0.0f);
-  const double cell = 4.0 * double(kPi) / (double(binsSide) * binsSide * kFine * kFine);
-  for (int by = 0; by < binsSide; ++by)
-    for (int bx = 0; bx < binsSide; ++bx) {
-      double sum[kShCount] = {};
-      for (int j = 0; j < kFine; ++j)
-        for (int i = 0; i < kFine; ++i) {
-          const glm::vec2 p(-1.0f + 2.0f * (float(bx * kFine + i) + 0.5f) / float(binsSide * kFine),
-                            -1.0f + 2.0f * (float(by * kFine + j) + 0.5f) / float(binsSide * kFine));
-          float y[kShCount];
-          runtime::shBasis(probeDirection(p), y);
-          for (int k = 0; k < kShCount; ++k) sum[k] += double(y[k]);
-        }
-      for (int k = 0; k < kShCount; ++k)
-        out[size_t(by * binsSide + bx) * kShCount + size_t(k)] = float(sum[k] * cell);
-    }
-  return out;
-}
-
 // The region weights that recover SH L2 from the regions' means: Σ_b ∫_b Y_i · W_b alone
 // projects a piecewise constant radiance, which blurs it (band 1 loses about a tenth, band 2
 // a third with 16 regions: a probe beside a lit wall would see it dimmer and the dark side
 // brighter). The least-squares L2 radiance whose region means are W instead is
 // M⁻¹ Σ_b ∫_b Y · W_b, with M_ij = Σ_b ∫_b Y_i ∫_b Y_j / Ω_b: exact for radiance within L2,
 // and folded into the weights, so the runtime does the same work.
-std::vector<float> leastSquaresRegionSh(const std::vector<float>& integrals, uint32_t bins) {
-  const double omega = 4.0 * double(kPi) / double(bins);
+std::vector<float> leastSquaresRegionSh(const std::vector<float>& integrals,
+                                        const std::vector<double>& solidAngle) {
+  const uint32_t bins = uint32_t(solidAngle.size());
   double m[kShCount][2 * kShCount] = {};
   for (int i = 0; i < kShCount; ++i) {
     for (int j = 0; j < kShCount; ++j)
       for (uint32_t b = 0; b < bins; ++b)
         m[i][j] += double(integrals[b * kShCount + size_t(i)]) *
-                   double(integrals[b * kShCount + size_t(j)]) / omega;
+                   double(integrals[b * kShCount + size_t(j)]) / solidAngle[b];
     m[i][kShCount + i] = 1.0;
   }
   // Gauss-Jordan with partial pivoting (M is symmetric positive definite for enough regions).
@@ -112,31 +89,53 @@ std::vector<float> leastSquaresRegionSh(const std::vector<float>& integrals, uin
 ProbeDirections::ProbeDirections(uint32_t side, uint32_t regionsSide)
     : rays(side * side), regions(regionsSide * regionsSide),
       omega(4.0f * kPi / float(side * side)) {
-  const uint32_t cells = side / regionsSide;  // a region's cells a side
+  // Cell (x, y) of the square lies in region (x · R / side, y · R / side): square blocks when R
+  // divides side, else blocks whose sides differ by a cell. Rays go region by region.
+  std::vector<uint32_t> order(rays), regionOfCell(rays);
+  for (uint32_t y = 0; y < side; ++y)
+    for (uint32_t x = 0; x < side; ++x)
+      regionOfCell[y * side + x] = (y * regionsSide / side) * regionsSide + x * regionsSide / side;
+  for (uint32_t c = 0; c < rays; ++c) order[c] = c;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t b) { return regionOfCell[a] < regionOfCell[b]; });
   direction.resize(rays);
   region.resize(rays);
+  raysOfRegion.assign(regions, 0);
   basis.resize(size_t(rays) * kShCount);
   products.resize(size_t(rays) * runtime::kProbeSkyCount);
-  uint32_t k = 0;
-  for (uint32_t by = 0; by < regionsSide; ++by)
-    for (uint32_t bx = 0; bx < regionsSide; ++bx)
-      for (uint32_t cy = 0; cy < cells; ++cy)
-        for (uint32_t cx = 0; cx < cells; ++cx, ++k) {
-          const uint32_t x = bx * cells + cx, y = by * cells + cy;
-          const glm::vec2 q(-1.0f + 2.0f * (float(x) + 0.5f) / float(side),
-                            -1.0f + 2.0f * (float(y) + 0.5f) / float(side));
-          direction[k] = probeDirection(q);
-          region[k] = by * regionsSide + bx;
-          float* yk = &basis[size_t(k) * kShCount];
-          runtime::shBasis(direction[k], yk);
-          for (int i = 0; i < kShCount; ++i)
-            for (int j = i; j < kShCount; ++j) {
-              const int at = runtime::probeSkyIndex(i, j);
-              products[size_t(k) * runtime::kProbeSkyCount + size_t(at)] = omega * yk[i] * yk[j];
-              allProducts[at] += double(omega) * double(yk[i]) * double(yk[j]);
-            }
-        }
-  regionSh = leastSquaresRegionSh(regionIntegrals(int(regionsSide)), regions);
+  // ∫_b Y_i dω per region, by the midpoint rule on 16² points a cell (each cell's solid angle
+  // is exact; the error is Y's variation inside a cell, far below a half float's precision).
+  constexpr uint32_t kFine = 16;
+  std::vector<float> integrals(size_t(regions) * kShCount, 0.0f);
+  std::vector<double> solidAngle(regions, 0.0), sums(size_t(regions) * kShCount, 0.0);
+  for (uint32_t k = 0; k < rays; ++k) {
+    const uint32_t c = order[k], x = c % side, y = c / side;
+    const glm::vec2 q(-1.0f + 2.0f * (float(x) + 0.5f) / float(side),
+                      -1.0f + 2.0f * (float(y) + 0.5f) / float(side));
+    direction[k] = probeDirection(q);
+    region[k] = regionOfCell[c];
+    ++raysOfRegion[region[k]];
+    float* yk = &basis[size_t(k) * kShCount];
+    runtime::shBasis(direction[k], yk);
+    for (int i = 0; i < kShCount; ++i)
+      for (int j = i; j < kShCount; ++j) {
+        const int at = runtime::probeSkyIndex(i, j);
+        products[size_t(k) * runtime::kProbeSkyCount + size_t(at)] = omega * yk[i] * yk[j];
+        allProducts[at] += double(omega) * double(yk[i]) * double(yk[j]);
+      }
+    solidAngle[region[k]] += double(omega);
+    for (uint32_t j = 0; j < kFine; ++j)
+      for (uint32_t i = 0; i < kFine; ++i) {
+        const glm::vec2 f(-1.0f + 2.0f * (float(x * kFine + i) + 0.5f) / float(side * kFine),
+                          -1.0f + 2.0f * (float(y * kFine + j) + 0.5f) / float(side * kFine));
+        float yf[kShCount];
+        runtime::shBasis(probeDirection(f), yf);
+        for (int n = 0; n < kShCount; ++n)
+          sums[size_t(region[k]) * kShCount + size_t(n)] += double(yf[n]) * double(omega) / (kFine * kFine);
+      }
+  }
+  for (size_t i = 0; i < integrals.size(); ++i) integrals[i] = float(sums[i]);
+  regionSh = leastSquaresRegionSh(integrals, solidAngle);
 }
 
 }  // namespace afterglow::baker

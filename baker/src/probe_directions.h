@@ -21,7 +21,8 @@ glm::vec3 equalAreaOctahedral(glm::vec2 square);
 glm::vec3 probeDirection(glm::vec2 square);
 
 // Every probe's rays: side² directions in region order (the cells of region 0, then of region
-// 1, ...: regions are regionsSide² square blocks of the grid), and per direction its region,
+// 1, ...: regions are regionsSide² blocks of the grid, square when regionsSide divides side,
+// else with sides that differ by a cell), and per direction its region,
 // its SH basis and the products Ω Y_i Y_j the sky's transfer sums (upper triangle,
 // runtime::probeSkyIndex), Ω = 4π / side² each.
 struct ProbeDirections {
@@ -30,6 +31,7 @@ struct ProbeDirections {
   float omega = 0.0f;
   std::vector<glm::vec3> direction;
   std::vector<uint32_t> region;
+  std::vector<uint32_t> raysOfRegion;  // per region, how many rays (cells) it has
   std::vector<float> basis;     // rays × kShCount
   std::vector<float> products;  // rays × kProbeSkyCount
   double allProducts[runtime::kProbeSkyCount] = {};  // their sum over every ray (≈ I)
