@@ -117,9 +117,8 @@ struct ProbeOptions {
   // (probe_directions.h). Bounced light is gathered per region, binsSide² blocks of cells (at
   // least 2 × 2 cells; square when binsSide divides raysSide, which fits best): more regions
   // follow bounced light's direction more closely but make more links and a slower refresh.
-  // McGuire's box against the reference (SH L2): 18/6 2.8%, 20/5 2.7%, 16/8 2.4%, 16/4 4.9%;
-  // Sponza's refresh per 10,000 probes: 3.6, 3.5 and 6 ms; its precompute: 23%, 27% and 20%
-  // of the bake.
+  // The README's table: McGuire's box against the reference (SH L2) 18/6 2.8%, 16/4 4.9%;
+  // Sponza's refresh per 10,000 probes 3.6 and 2.3 ms, its precompute 23% and 19% of the bake.
   int raysSide = 18;
   int binsSide = 6;
   // Emissive surfaces seen by a probe: this many points chosen by area on each emissive
