@@ -21,6 +21,7 @@
 #include "afterglow/runtime/solver.h"
 #include "afterglow/uv/unwrap.h"
 #include "../baker/src/path_tracer.h"
+#include "bake_fixtures.h"
 #include "../baker/src/sampling.h"
 
 namespace afterglow::baker {
@@ -104,19 +105,6 @@ LampRoom lampRoom(float panelY, float wallColour, float lampColour, bool singleS
 float albedoOf(const scenes::Scene& scene, uint32_t instance) {
   const int mesh = scene.instances[instance].mesh;
   return diffuseAlbedo(scene, scene.meshes[size_t(mesh)].primitives[0].material, glm::vec2(0.0f)).x;
-}
-
-void unwrapAt(scenes::Scene& scene, float texelsPerUnit) {
-  uv::UnwrapOptions u;
-  u.pack.texelsPerUnit = texelsPerUnit;
-  Result<uv::UnwrapResult> r = uv::unwrap(scene, u);
-  ASSERT_TRUE(r) << r.message();
-}
-
-BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
-  Result<BakeResult> r = bake(scene, options);
-  EXPECT_TRUE(r) << r.message();
-  return r ? std::move(r.value()) : BakeResult{};
 }
 
 // Σ (1 − ρ) (E/π) A as the bake sees it: the lightmaps over every covered texel (buried ones
