@@ -91,6 +91,8 @@ TEST(ProbesFiles, BadPlacementsNameTheFileAndTheObject) {
   json format = placement();
   format.erase("format");
   EXPECT_NE(errorOf(format).find("afterglow probes place"), std::string::npos);
+  format["format"] = 0;  // not a string (the fuzzer's find: it used to throw)
+  EXPECT_NE(errorOf(format).find("afterglow probes place"), std::string::npos);
 }
 
 TEST(ProbesFiles, TheShFileRoundTripsAndRefusesDamage) {

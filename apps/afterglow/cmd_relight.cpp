@@ -264,7 +264,13 @@ int runRelight(int argc, char** argv, int first) {
     return kExitBadInput;
   }
   json& settings = report["settings"];
-  int bounces = settings.value("bounces", 0);
+  const json bakedBounces = settings.value("bounces", json(0));
+  if (!bakedBounces.is_number_integer() || bakedBounces.get<int64_t>() < 0 ||
+      bakedBounces.get<int64_t>() > 100000) {
+    printError(reportPath.string() + ": settings.bounces is not a bounce count: " + bakedBounces.dump());
+    return kExitBadInput;
+  }
+  int bounces = int(bakedBounces.get<int64_t>());
   if (!args.getInt("bounces", bounces, 0, 100000, &bounces)) return usage(args.error());
 
   auto t0 = Clock::now();

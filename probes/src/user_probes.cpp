@@ -62,7 +62,9 @@ Result<ProbesFile> parseProbesFile(const std::string& text, const std::string& p
   Result<UserProbes> base = parseUserProbes(text, path);
   if (!base) return base.status();
   const json doc = json::parse(text, nullptr, false);
-  if (doc.value("format", std::string()) != "afterglow-light-probes")
+  auto format = doc.find("format");
+  if (format == doc.end() || !format->is_string() ||
+      format->get<std::string>() != "afterglow-light-probes")
     return Status::error(path + ": not an afterglow light probes file (no \"format\": "
                                 "\"afterglow-light-probes\"; write one with afterglow probes place)");
   ProbesFile out;
