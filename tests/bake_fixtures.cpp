@@ -33,6 +33,32 @@ BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
   return r ? std::move(r.value()) : BakeResult{};
 }
 
+scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColor,
+                         float specularFactor) {
+  scenes::Scene scene;
+  scenes::Material m;
+  m.name = name;
+  m.baseColorFactor = glm::vec4(glm::vec3(baseColor), 1.0f);
+  m.metallicFactor = 0.0f;
+  m.specularFactor = specularFactor;
+  scene.materials.push_back(m);
+  scenes::Primitive prim;
+  prim.material = 0;
+  const float h = halfSize;
+  prim.positions = {{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}};
+  prim.normals.assign(4, glm::vec3(0, 1, 0));
+  prim.indices = {0, 2, 1, 0, 3, 2};
+  scenes::Mesh mesh;
+  mesh.name = name;
+  mesh.primitives.push_back(prim);
+  scene.meshes.push_back(mesh);
+  scenes::Instance inst;
+  inst.name = name;
+  inst.mesh = 0;
+  scene.instances.push_back(inst);
+  return scene;
+}
+
 scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohmann::json& specular) {
   scenes::FurnaceOptions f;
   f.albedo = glm::vec3(baseColor);

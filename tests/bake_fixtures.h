@@ -16,6 +16,10 @@ BakeOptions draftOptions();
 void unwrapAt(scenes::Scene& scene, float texelsPerUnit);
 // The bake's result, or an empty one and a test failure.
 BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options);
+// A horizontal square of side 2 × halfSize at y = 0, facing +Y, of one material (a dielectric,
+// metallic 0: glTF's default is a metal) with this base colour and specularFactor.
+scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColor,
+                         float specularFactor = 1.0f);
 // The white furnace as a level: the procedural box (emission 1, base colour `baseColor`)
 // written through the exporter, its one material's KHR_materials_specular put into the JSON by
 // hand (when `specular` is not null), loaded back from the file and unwrapped at 4 texels/unit.

@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -21,6 +20,7 @@
 #include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
+#include "bake_fixtures.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -32,24 +32,18 @@ namespace {
 constexpr float kAlbedo = 0.8f;  // the spheres' (baker::kProbeSphereAlbedo, as documented)
 
 // A render's float RGB as written to an EXR, row 0 at the top.
+// A render's linear RGB (through the renderer's own EXR reader), row 0 at the top; empty when
+// it cannot be read.
 struct LinearPicture {
   int width = 0, height = 0;
-  std::vector<float> rgb;
-  glm::vec3 at(int x, int y) const {
-    const size_t i = (size_t(y) * size_t(width) + size_t(x)) * 3;
-    return {rgb[i], rgb[i + 1], rgb[i + 2]};
-  }
+  std::vector<glm::vec3> pixels;
+  glm::vec3 at(int x, int y) const { return pixels[size_t(y) * size_t(width) + size_t(x)]; }
 };
 
 LinearPicture readExr(const std::string& path) {
-  LinearPicture p;
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) return p;
-  p.width = in->spec().width;
-  p.height = in->spec().height;
-  p.rgb.resize(size_t(p.width) * size_t(p.height) * 3);
-  if (!in->read_image(0, 0, 0, 3, OIIO::TypeDesc::FLOAT, p.rgb.data())) p = LinearPicture();
-  return p;
+  Result<baker::LightmapImage> image = baker::readLinearImage(path);
+  if (!image) return {};
+  return {image->width, image->height, std::move(image->pixels)};
 }
 
 std::vector<glm::vec3> probePositions(const std::string& out) {
@@ -150,27 +144,9 @@ TEST(CliProbeSpheres, FurnaceSpheresAreAlbedoTimesLeOverOneMinusRho) {
 // quadrature of the sharp horizon: E/π sideways is 0.743 to 0.757 L for 0.75 L.)
 TEST(CliProbeSpheres, UnderHalfASkyEachNormalGetsItsAnalyticIrradiance) {
   const std::string dir = tempDir("cli_probe_spheres_sky");
-  scenes::Scene ground;
-  scenes::Material grey;
-  grey.name = "grey";
-  grey.baseColorFactor = glm::vec4(0.5f, 0.5f, 0.5f, 1.0f);  // ρ = 0.96 × 0.5 + 0.02 = 0.5
-  grey.metallicFactor = 0.0f;  // glTF's default is a metal
-  grey.roughnessFactor = 1.0f;
-  ground.materials.push_back(grey);
-  scenes::Mesh mesh;
-  mesh.name = "ground";
-  scenes::Primitive prim;
-  prim.material = 0;
-  const float h = 1000.0f;  // the gap under the horizon: 2/1000 rad from the higher probes
-  prim.positions = {{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}};
-  prim.normals.assign(4, glm::vec3(0, 1, 0));
-  prim.indices = {0, 2, 1, 0, 3, 2};
-  mesh.primitives.push_back(prim);
-  ground.meshes.push_back(mesh);
-  scenes::Instance inst;
-  inst.name = "ground";
-  inst.mesh = 0;
-  ground.instances.push_back(inst);
+  // Base colour 0.5, default specular: ρ = 0.96 × 0.5 + 0.02 = 0.5. 1 km a side: the gap under
+  // the horizon is 2/1000 rad from the higher probes.
+  const scenes::Scene ground = baker::groundQuad("ground", 1000.0f, 0.5f);
   Status saved = scenes::saveGltf(ground, dir + "/ground.gltf");
   ASSERT_TRUE(saved) << saved.message();
 
@@ -272,14 +248,14 @@ TEST(CliProbeSpheres, SameForOneAndTwoThreads) {
     ASSERT_EQ(runCli(dir, view + "--threads 1 -o '" + dir + "/one.exr'").exitCode, 0) << count;
     ASSERT_EQ(runCli(dir, view + "--threads 2 -o '" + dir + "/two.exr'").exitCode, 0) << count;
     const LinearPicture one = readExr(dir + "/one.exr"), two = readExr(dir + "/two.exr");
-    ASSERT_EQ(one.rgb.size(), size_t(96 * 72 * 3)) << count;
-    EXPECT_TRUE(one.rgb == two.rgb) << count;
+    ASSERT_EQ(one.pixels.size(), size_t(96 * 72)) << count;
+    EXPECT_TRUE(one.pixels == two.pixels) << count;
   }
   // The PNG too, and the spheres change the picture.
   const std::string view =
       "render '" + out + "/scene.gltf' --width 96 --height 72 --quiet -o '" + dir;
   ASSERT_EQ(runCli(dir, view + "/plain.exr'").exitCode, 0);
-  EXPECT_FALSE(readExr(dir + "/plain.exr").rgb == readExr(dir + "/one.exr").rgb);
+  EXPECT_FALSE(readExr(dir + "/plain.exr").pixels == readExr(dir + "/one.exr").pixels);
   ASSERT_EQ(runCli(dir, view + "/spheres.png' --probe-spheres 3").exitCode, 0);
   EXPECT_TRUE(fs::exists(dir + "/spheres.png"));
 }

@@ -70,31 +70,20 @@ TEST(ProbesBake, FurnaceEveryProbeAndNormalIsLeOverOneMinusRho) {
               worst);
 }
 
-// A ground plate far below a probe: the probe sees (nearly) the whole sky, whose constant
-// radiance L must come back as E/π = L for every normal above the horizon, and the plate's
-// reflected light below.
-scenes::Scene groundPlate(float albedo) {
-  scenes::Scene scene;
-  scenes::Material m;
-  m.name = "ground";
-  m.baseColorFactor = glm::vec4(albedo, albedo, albedo, 1.0f);
-  m.specularFactor = 0.0f;
-  scene.materials.push_back(m);
-  scenes::Mesh mesh;
-  mesh.name = "plate";
-  scenes::Primitive prim;
-  prim.material = 0;
-  const float h = 2.0f;
-  prim.positions = {{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}};
-  prim.normals.assign(4, glm::vec3(0, 1, 0));
-  prim.indices = {0, 2, 1, 0, 3, 2};
-  mesh.primitives.push_back(prim);
-  scene.meshes.push_back(mesh);
-  scenes::Instance inst;
-  inst.name = "plate";
-  inst.mesh = 0;
-  scene.instances.push_back(inst);
-  return scene;
+// A ground plate of side 4 m (specularFactor 0): under a probe far above it, it covers a sliver
+// of the probe's sphere, so the probe sees the sky's constant radiance L as E/π = L for every
+// normal; under a sun, nothing stands between probes above it and the light.
+scenes::Scene groundPlate(float albedo) { return groundQuad("plate", 2.0f, albedo, 0.0f); }
+
+// A directional light from above, unit colour and intensity unless given.
+scenes::Light sunLight(float intensity = 1.0f, glm::vec3 color = glm::vec3(1.0f)) {
+  scenes::Light sun;
+  sun.name = "sun";
+  sun.type = scenes::LightType::Directional;
+  sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+  sun.intensity = intensity;
+  sun.color = color;
+  return sun;
 }
 
 TEST(ProbesBake, ProbeInTheOpenSeesTheConstantSky) {
@@ -123,13 +112,8 @@ TEST(ProbesBake, ProbeInTheOpenSeesTheConstantSky) {
 TEST(ProbesBake, DirectionalLightGivesItsClampedCosine) {
   scenes::Scene scene = groundPlate(0.0f);
   unwrapAt(scene, 4.0f);
-  scenes::Light sun;
-  sun.name = "sun";
-  sun.type = scenes::LightType::Directional;
-  sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
-  sun.intensity = 3.0f;
+  scenes::Light sun = sunLight(3.0f, glm::vec3(1.0f, 0.8f, 0.6f));
   sun.angularDiameter = 0.0f;  // a point on the sky: its SH is the basis at one direction
-  sun.color = glm::vec3(1.0f, 0.8f, 0.6f);
   scene.lights.push_back(sun);
   BakeOptions options = draftOptions();
   std::vector<glm::vec3> positions;
@@ -298,11 +282,7 @@ TEST(ProbesBake, DeterministicAndSampledAtTheProbesThemselves) {
 TEST(ProbesBake, ProbesRefreshAloneWithinABudget) {
   scenes::Scene scene = groundPlate(0.5f);
   unwrapAt(scene, 4.0f);
-  scenes::Light sun;
-  sun.name = "sun";
-  sun.type = scenes::LightType::Directional;
-  sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
-  scene.lights.push_back(sun);
+  scene.lights.push_back(sunLight());
   BakeOptions options = draftOptions();
   std::vector<glm::vec3> positions;
   for (int z = 0; z < 8; ++z)

@@ -17,6 +17,15 @@ runtime::ShL2 BakedProbes::sample(glm::vec3 p, int* hint) const {
   return deringWindow > 0.0f ? runtime::deringed(sh, deringWindow) : sh;
 }
 
+Result<int> bakedBounces(const nlohmann::json& settings, const std::string& reportPath) {
+  const nlohmann::json bounces = settings.value("bounces", nlohmann::json(0));
+  if (!bounces.is_number_integer() || bounces.get<int64_t>() < 0 ||
+      bounces.get<int64_t>() > 100000)
+    return Status::error(reportPath + ": settings.bounces is not a bounce count: " +
+                         bounces.dump());
+  return int(bounces.get<int64_t>());
+}
+
 Result<BakedProbes> loadBakedProbes(const std::string& outDir) {
   BakedProbes out;
   const fs::path dir(outDir);
@@ -34,15 +43,12 @@ Result<BakedProbes> loadBakedProbes(const std::string& outDir) {
         !report["settings"].is_object())
       return Status::error(reportPath + ": not a bake report");
     const nlohmann::json& settings = report["settings"];
-    const nlohmann::json bounces = settings.value("bounces", nlohmann::json(0));
+    Result<int> bounces = bakedBounces(settings, reportPath);
+    if (!bounces) return bounces.status();
     const nlohmann::json dering = settings.value("probeDering", nlohmann::json(0.0));
-    if (!bounces.is_number_integer() || bounces.get<int64_t>() < 0 ||
-        bounces.get<int64_t>() > 100000)
-      return Status::error(reportPath + ": settings.bounces is not a bounce count: " +
-                           bounces.dump());
     if (!dering.is_number() || !(dering.get<double>() >= 0.0) || !(dering.get<double>() < 1e6))
       return Status::error(reportPath + ": settings.probeDering is not a window: " + dering.dump());
-    out.bounces = int(bounces.get<int64_t>());
+    out.bounces = bounces.value();
     out.deringWindow = dering.get<float>();
   }
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
 
 #include "afterglow/core/status.h"
 #include "afterglow/runtime/probe_sh.h"
@@ -23,6 +24,10 @@ struct BakedProbes {
   // deringed as the bake's SH file is: at a probe's position, that probe's SH in the file.
   runtime::ShL2 sample(glm::vec3 p, int* hint) const;
 };
+
+// The bounce passes a bake ran, from its report's settings (0: until converged); an error
+// naming the report when "bounces" is not a count.
+Result<int> bakedBounces(const nlohmann::json& settings, const std::string& reportPath);
 
 // Loads OUT/transport.agt and solves it as `afterglow bake` did: from scratch, with the bake's
 // bounce count and tolerance (OUT/report.json's settings; without a report, until converged,

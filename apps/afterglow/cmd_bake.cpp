@@ -252,22 +252,23 @@ Status writeProbeOutputs(const std::string& outDir, const ProbeSet& set,
                              {"rays", bakeSettings.value("probeRays", 0)},
                              {"regions", bakeSettings.value("probeRegions", 0)},
                              {"emitterSamples", bakeSettings.value("probeEmitterSamples", 0)}};
-  nlohmann::json doc = nlohmann::json::parse(
-      probes::probesJson(placement, set.file.names, set.file.mesh, settings.dump(), set.summary.dump()));
-  doc["sh"] = {{"file", "light_probes_sh.bin"},
-               {"format", "afterglow-light-probe-sh"},
-               {"version", runtime::kProbeShVersion},
-               {"basis", "real SH L2, bands 0-2, orthonormal (Y00 = 0.282095), world axes +Y up"},
-               {"stores", "radiance SH L_i = integral of L(w) Y_i(w) dw, RGB; E/pi via the "
-                          "clamped-cosine convolution (runtime/probe_sh.h)"},
-               {"deringWindow", dering}};
+  const nlohmann::json shInfo = {
+      {"file", "light_probes_sh.bin"},
+      {"format", "afterglow-light-probe-sh"},
+      {"version", runtime::kProbeShVersion},
+      {"basis", "real SH L2, bands 0-2, orthonormal (Y00 = 0.282095), world axes +Y up"},
+      {"stores", "radiance SH L_i = integral of L(w) Y_i(w) dw, RGB; E/pi via the "
+                 "clamped-cosine convolution (runtime/probe_sh.h)"},
+      {"deringWindow", dering}};
+  const std::string text = probes::probesJson(placement, set.file.names, set.file.mesh,
+                                              settings.dump(), set.summary.dump(), shInfo.dump());
   runtime::ProbeShFile file;
   file.deringWindow = dering;
   file.sh = sh;
   if (dering > 0.0f)
     for (runtime::ShL2& s : file.sh) s = runtime::deringed(s, dering);
   const std::vector<uint8_t> bytes = runtime::serializeProbeSh(file);
-  if (Status st = files.write((dir / "light_probes.json").string(), doc.dump() + "\n"); !st) return st;
+  if (Status st = files.write((dir / "light_probes.json").string(), text); !st) return st;
   return files.write((dir / "light_probes_sh.bin").string(),
                      std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }

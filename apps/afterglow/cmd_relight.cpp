@@ -22,6 +22,7 @@
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/scenes/gltf.h"
 #include "args.h"
+#include "baked_probes.h"
 #include "commands.h"
 #include "common.h"
 
@@ -264,13 +265,12 @@ int runRelight(int argc, char** argv, int first) {
     return kExitBadInput;
   }
   json& settings = report["settings"];
-  const json bakedBounces = settings.value("bounces", json(0));
-  if (!bakedBounces.is_number_integer() || bakedBounces.get<int64_t>() < 0 ||
-      bakedBounces.get<int64_t>() > 100000) {
-    printError(reportPath.string() + ": settings.bounces is not a bounce count: " + bakedBounces.dump());
+  const Result<int> baked = bakedBounces(settings, reportPath.string());
+  if (!baked) {
+    printError(baked.message());
     return kExitBadInput;
   }
-  int bounces = int(bakedBounces.get<int64_t>());
+  int bounces = baked.value();
   if (!args.getInt("bounces", bounces, 0, 100000, &bounces)) return usage(args.error());
 
   auto t0 = Clock::now();

@@ -22,6 +22,7 @@ struct FarTargets {
   std::vector<std::vector<uint32_t>> ofTexel;  // [level][texel]
   std::vector<float> reach2;
   std::vector<uint32_t> target;  // a cluster, or clusterCount + its row of farClusters
+  uint32_t rows = 0;             // far clusters that got a row (those of several clusters)
 
   // The link target of the coarsest far cluster of texel t that a point at squared distance
   // d2 sees from far enough, or runtime::kNoTexel.
@@ -38,9 +39,9 @@ struct FarTargets {
 // Numbers the front far clusters level by level, fills farClusters (each the area-weighted mix
 // of the clusters its texels belong to, for those of several clusters) and the targets. A far
 // cluster's radius is the farthest of its texels' corners from its centre. Deterministic: the
-// probes rebuild the same targets into a scratch matrix.
+// probes rebuild the same targets, without the rows (farClusters null).
 FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
                       const std::vector<Clusters>& levels, float farDistance,
-                      runtime::SparseMatrix& farClusters);
+                      runtime::SparseMatrix* farClusters);
 
 }  // namespace afterglow::baker

@@ -345,9 +345,9 @@ FarGroups shareFarFields(const RayTracer& tracer, const TexelSet& texels,
 // the targets. A far cluster's radius is the farthest of its texels' corners from its centre.
 FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
                       const std::vector<Clusters>& levels, float farDistance,
-                      runtime::SparseMatrix& farClusters) {
+                      runtime::SparseMatrix* farClusters) {
   FarTargets out;
-  farClusters = runtime::SparseMatrix();
+  if (farClusters) *farClusters = runtime::SparseMatrix();
   if (!(farDistance > 0.0f)) return out;
   std::vector<std::pair<uint32_t, float>> entries;
   for (const Clusters& far : levels) {
@@ -373,8 +373,8 @@ FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
         out.target.push_back(entries[0].first);
         continue;
       }
-      out.target.push_back(clusters.size() + uint32_t(farClusters.rows()));
-      farClusters.appendNormalisedRow(entries);
+      out.target.push_back(clusters.size() + out.rows++);
+      if (farClusters) farClusters->appendNormalisedRow(entries);
     }
   }
   return out;
@@ -416,7 +416,7 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
   };
   const FarTargets far =
-      farTargets(texels, clusters, farLevels, options.farDistance, transport.farClusters);
+      farTargets(texels, clusters, farLevels, options.farDistance, &transport.farClusters);
   // (Without far clusters there is no far field to share.)
   const FarGroups groups =
       shareFarFields(tracer, texels, gather, far.empty() ? 0 : options.sharedFarSpan);

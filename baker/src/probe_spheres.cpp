@@ -117,14 +117,7 @@ float clearRadius(const RayTracer& tracer, glm::vec3 centre, float radius) {
 
 // The probes' radiance SH at p: the tetrahedral weights of the probes around it.
 runtime::ShL2 sampleProbes(const LightProbes& probes, glm::vec3 p, int hint) {
-  const runtime::ProbeLocation loc = runtime::locateProbe(probes.mesh, p, hint);
-  runtime::ShL2 out;
-  for (int k = 0; k < 4; ++k) {
-    if (loc.probes[k] < 0 || loc.weights[k] == 0.0f) continue;
-    const runtime::ShL2& sh = probes.sh[size_t(loc.probes[k])];
-    for (int i = 0; i < runtime::kShCount; ++i) out.c[i] += loc.weights[k] * sh.c[i];
-  }
-  return out;
+  return runtime::mixProbes(runtime::locateProbe(probes.mesh, p, hint), probes.sh);
 }
 
 // One candidate of a handful: where it lands on the picture and how big it looks.

@@ -307,14 +307,13 @@ Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
   out.bins = dirs.regions;
   out.binSh = dirs.regionSh;
 
-  // The same far targets as the gather points' links, rebuilt into a scratch matrix (it must
-  // equal transport.farClusters, which computeLinks filled: same inputs, same numbering; only
-  // the distance from which a far cluster stands in may differ).
-  runtime::SparseMatrix farRows;
+  // The same far targets as the gather points' links, numbered alike (computeLinks made the
+  // rows of transport.farClusters from the same inputs); only the distance from which a far
+  // cluster stands in may differ.
   const FarTargets far = farTargets(texels, clusters, farLevels,
                                     options.farDistance > 0.0f ? options.farDistance : farDistance,
-                                    farRows);
-  if (farRows.rows() != transport.farClusters.rows())
+                                    nullptr);
+  if (far.rows != transport.farClusters.rows())
     return Status::error("computeProbeTransfer: the far clusters differ from the links'");
 
   ProbeTracer probes(scene, tracer, texels, clusters, far, options, dirs, mesh.positions);

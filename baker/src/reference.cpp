@@ -190,6 +190,28 @@ glm::vec3 PathTracer::cameraRadiance(const Ray& ray, glm::vec2 u, sampling::Rng&
   return radiance + diffuseAlbedo(scene_, material, uv0) * (e.direct + e.indirect);
 }
 
+namespace {
+
+// The mean of a point's path estimates and the variance of that mean as if the paths were
+// independent (the stratified first direction makes the true variance smaller, so this is an
+// upper bound on the reference's noise).
+struct Moments {
+  glm::dvec3 sum{0.0}, squares{0.0};
+  void add(glm::dvec3 v) {
+    sum += v;
+    squares += v * v;
+  }
+  glm::vec3 mean(uint32_t n) const { return glm::vec3(sum / double(n)); }
+  glm::vec3 varianceOfMean(uint32_t n) const {
+    if (n < 2) return glm::vec3(0.0f);
+    const double m = double(n);
+    const glm::dvec3 mu = sum / m;
+    return glm::vec3(glm::max(squares / m - mu * mu, 0.0) / (m - 1.0));
+  }
+};
+
+}  // namespace
+
 Result<ReferenceTexels> referenceTexels(const scenes::Scene& scene, const RayTracer& tracer,
                                         const TexelSet& texels, const Environment& environment,
                                         const ReferenceOptions& options,
@@ -215,28 +237,19 @@ Result<ReferenceTexels> referenceTexels(const scenes::Scene& scene, const RayTra
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     for (size_t i = begin; i < end && !progress.cancelled(); ++i) {
       const uint32_t t = out.texels[i];
-      glm::dvec3 sumD(0.0), sumI(0.0), sqD(0.0), sqI(0.0);
+      Moments direct, indirect;
       for (uint32_t s = 0; s < samples; ++s) {
         sampling::Rng rng(sampling::Stream::Reference, t, s);
         const glm::vec2 u = sampling::stratified2(rng, s, samples);
         const PathTracer::Estimate e = pt.irradiance(texels.position[t], texels.normal[t],
                                                      texels.geometricNormal[t], u, rng);
-        const glm::dvec3 d(e.direct), ind(e.indirect);
-        sumD += d;
-        sumI += ind;
-        sqD += d * d;
-        sqI += ind * ind;
+        direct.add(glm::dvec3(e.direct));
+        indirect.add(glm::dvec3(e.indirect));
       }
-      const double n = double(samples);
-      const glm::dvec3 meanD = sumD / n, meanI = sumI / n;
-      out.direct[i] = glm::vec3(meanD);
-      out.indirect[i] = glm::vec3(meanI);
-      // Variance of the mean as if the paths were independent; the stratified first direction
-      // makes the true variance smaller, so this is an upper bound on the reference's noise.
-      if (samples > 1) {
-        out.directVariance[i] = glm::vec3(glm::max(sqD / n - meanD * meanD, 0.0) / (n - 1.0));
-        out.indirectVariance[i] = glm::vec3(glm::max(sqI / n - meanI * meanI, 0.0) / (n - 1.0));
-      }
+      out.direct[i] = direct.mean(samples);
+      out.indirect[i] = indirect.mean(samples);
+      out.directVariance[i] = direct.varianceOfMean(samples);
+      out.indirectVariance[i] = indirect.varianceOfMean(samples);
       progress.advance();
     }
   }, 4);
@@ -263,19 +276,15 @@ Result<ReferencePoints> referenceIrradiance(const scenes::Scene& scene, const Ra
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     for (size_t i = begin; i < end && !progress.cancelled(); ++i) {
       const glm::vec3 n = glm::normalize(normals[i]);
-      glm::dvec3 sum(0.0), sq(0.0);
+      Moments total;
       for (uint32_t s = 0; s < samples; ++s) {
         sampling::Rng rng(sampling::Stream::Reference, (uint64_t(1) << 40) | i, s);
         const glm::vec2 u = sampling::stratified2(rng, s, samples);
         const PathTracer::Estimate e = pt.irradiance(points[i], n, n, u, rng);
-        const glm::dvec3 v = glm::dvec3(e.direct) + glm::dvec3(e.indirect);
-        sum += v;
-        sq += v * v;
+        total.add(glm::dvec3(e.direct) + glm::dvec3(e.indirect));
       }
-      const double m = double(samples);
-      const glm::dvec3 mean = sum / m;
-      out.irradiance[i] = glm::vec3(mean);
-      if (samples > 1) out.variance[i] = glm::vec3(glm::max(sq / m - mean * mean, 0.0) / (m - 1.0));
+      out.irradiance[i] = total.mean(samples);
+      out.variance[i] = total.varianceOfMean(samples);
       progress.advance();
     }
   }, 1);

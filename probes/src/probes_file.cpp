@@ -11,7 +11,7 @@ using json = nlohmann::json;
 
 std::string probesJson(const Placement& placement, const std::vector<std::string>& names,
                        const runtime::ProbeTetrahedra& mesh, const std::string& settingsJson,
-                       const std::string& summaryJson) {
+                       const std::string& summaryJson, const std::string& shJson) {
   json doc;
   doc["format"] = "afterglow-light-probes";
   doc["version"] = 1;
@@ -38,6 +38,7 @@ std::string probesJson(const Placement& placement, const std::vector<std::string
   doc["neighbours"] = std::move(neighbours);
   doc["settings"] = json::parse(settingsJson, nullptr, false);
   doc["summary"] = json::parse(summaryJson, nullptr, false);
+  if (!shJson.empty()) doc["sh"] = json::parse(shJson, nullptr, false);
   // Compact: a level holds tens of thousands of probes and hundreds of thousands of tetrahedra.
   return doc.dump() + "\n";
 }

@@ -120,4 +120,14 @@ glm::vec3 evalShaderConstants(const ShaderConstants& k, glm::vec3 n) {
   return out;
 }
 
+ShL2 mixProbes(const ProbeLocation& where, const std::vector<ShL2>& probeSh) {
+  ShL2 out;
+  for (int k = 0; k < 4; ++k) {
+    if (where.probes[k] < 0 || where.weights[k] == 0.0f) continue;
+    const ShL2& sh = probeSh[size_t(where.probes[k])];
+    for (int i = 0; i < kShCount; ++i) out.c[i] += where.weights[k] * sh.c[i];
+  }
+  return out;
+}
+
 }  // namespace afterglow::runtime

@@ -400,18 +400,11 @@ bool Runtime::probeSh(int probe, ShL2* sh) const {
 }
 
 ShL2 Runtime::sampleProbes(glm::vec3 position, int* hint) const {
-  ShL2 out;
-  if (probeCount() == 0) return out;
+  if (probeCount() == 0) return ShL2();
   const ProbeLocation where = locateProbe(data_.probes.mesh, position, hint ? *hint : 0);
   if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
   std::lock_guard<std::mutex> lock(outputMutex_);
-  const std::vector<ShL2>& sh = probes_[probeFront_];
-  for (int k = 0; k < 4; ++k) {
-    if (where.probes[k] < 0 || where.weights[k] == 0.0f) continue;
-    const ShL2& p = sh[size_t(where.probes[k])];
-    for (int i = 0; i < kShCount; ++i) out.c[i] += where.weights[k] * p.c[i];
-  }
-  return out;
+  return mixProbes(where, probes_[probeFront_]);
 }
 
 glm::vec3 Runtime::evaluateIrradiance(const ShL2& sh, glm::vec3 normal) {

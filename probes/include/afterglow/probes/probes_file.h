@@ -51,9 +51,10 @@ struct ProbesFile {
 Result<ProbesFile> readProbesFile(const std::string& path);
 Result<ProbesFile> parseProbesFile(const std::string& text, const std::string& path);
 
-// The file's text. `settingsJson` and `summaryJson` are JSON objects as text ("{}" for none).
+// The file's text. `settingsJson` and `summaryJson` are JSON objects as text ("{}" for none);
+// `shJson`, when not empty, becomes the "sh" member (the bake's SH file, named and described).
 std::string probesJson(const Placement& placement, const std::vector<std::string>& names,
                        const runtime::ProbeTetrahedra& mesh, const std::string& settingsJson,
-                       const std::string& summaryJson);
+                       const std::string& summaryJson, const std::string& shJson = "");
 
 }  // namespace afterglow::probes

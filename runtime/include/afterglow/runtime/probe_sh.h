@@ -17,6 +17,7 @@
 #pragma once
 
 #include <array>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -70,6 +71,9 @@ glm::vec3 irradianceOverPi(const ShL2& radianceSh, glm::vec3 normal);
 // band 2 so much that E/π opposite the light gets *more* negative (−3/64·E0/π at w = 3), so keep
 // w ≥ 4 for irradiance. Apply it to the radiance SH before irradianceOverPi / the exports.
 ShL2 deringed(const ShL2& radianceSh, float window);
+
+// The SH at a located point (locateProbe): its probes' SH mixed with their weights.
+ShL2 mixProbes(const ProbeLocation& where, const std::vector<ShL2>& probeSh);
 
 // --- Unity ---------------------------------------------------------------------------------
 //
