@@ -3,12 +3,18 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 
 #if defined(__SSE2__) || defined(_M_X64)
 #include <emmintrin.h>
 #include <xmmintrin.h>
 #define AFTERGLOW_SSE2 1
+#endif
+// GCC and Clang on x86-64: kernels built for AVX2 beside the baseline's, picked at run time.
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#define AFTERGLOW_AVX2_DISPATCH 1
 #endif
 
 
@@ -89,6 +95,17 @@ void constantSkySh(glm::vec3 radiance, glm::vec3 sh[kShCount]) {
   sh[0] = radiance * (2.0f * std::sqrt(3.14159265358979f));
 }
 
+namespace {
+void probeBounceGeneric(const SparseLinks& links, size_t firstRow, uint32_t bins,
+                        const uint8_t* groupRegion, const glm::vec4* binSh, const glm::vec4* r,
+                        glm::vec4 out[kShCount]);
+#ifdef AFTERGLOW_AVX2_DISPATCH
+void probeBounceAvx2(const SparseLinks& links, size_t firstRow, uint32_t bins,
+                     const uint8_t* groupRegion, const glm::vec4* binSh, const glm::vec4* r,
+                     glm::vec4 out[kShCount]);
+#endif
+}  // namespace
+
 Solver::Solver(const TransportData& data) : data_(data) {
   const size_t clusters = data.clusterCount, rows = data.links.rows();
   albedo_.resize(clusters);
@@ -100,6 +117,28 @@ Solver::Solver(const TransportData& data) : data_(data) {
   scratch_.assign(data.gatherPointCount, glm::vec4(0.0f));
   blockChange_.assign((clusters + kBlock - 1) / kBlock, 0.0f);
   sourceScale_.resize(data.sources.size());
+  // The probes' region weights, paired (probeBounceGeneric); an odd last region pairs with
+  // zeros.
+  const uint32_t bins = data.probes.bins;
+  probeBinSh_.assign(size_t((bins + 1) / 2) * kShCount * 2, glm::vec4(0.0f));
+  for (uint32_t b = 0; b < bins && data.probes.binSh.size() >= size_t(bins) * kShCount; ++b)
+    for (int i = 0; i < kShCount; ++i)
+      probeBinSh_[(size_t(b / 2) * kShCount + size_t(i)) * 2 + (b & 1)] =
+          glm::vec4(data.probes.binSh[size_t(b) * kShCount + size_t(i)]);
+  // Per group of four links, its region (the row's index within its probe).
+  const SparseLinks& links = data.probes.links;
+  probeGroupRegion_.assign(links.size() / kLinkGroup, 0);
+  for (size_t row = 0; bins > 0 && row < links.rows(); ++row)
+    for (uint32_t k = links.rowStart[row]; k < links.rowStart[row + 1]; k += kLinkGroup)
+      probeGroupRegion_[k / kLinkGroup] = uint8_t(row % bins);
+  probeBounce_ = probeBounceGeneric;
+#ifdef AFTERGLOW_AVX2_DISPATCH
+  // AFTERGLOW_NO_AVX2 (any value) keeps the baseline kernels, as on a CPU without AVX2: to
+  // compare the two, or to have the same bits on every machine.
+  if (!std::getenv("AFTERGLOW_NO_AVX2") && __builtin_cpu_supports("avx2") &&
+      __builtin_cpu_supports("fma"))
+    probeBounce_ = probeBounceAvx2;
+#endif
   prepare();
 }
 
@@ -169,6 +208,107 @@ inline glm::vec4 linkRow(const SparseLinks& links, size_t row, const glm::vec4* 
 #endif
 }
 
+// A probe's bounced light as SH (four channels per coefficient): each region's mean radiance
+// (its row of links) spread over the nine coefficients by the region's weights. `binSh` holds
+// the weights of regions 2q and 2q + 1 side by side, each repeated in four lanes ([q][i][2]
+// vec4s), so one load serves a multiply without a broadcast.
+//
+// A probe's regions hold few links each (0 to 3 groups of four, unpredictably), so a loop per
+// row would mispredict its exit every other row. Instead one loop runs over the probe's
+// groups, each adding its four links into its region's sum (groupRegion: per group of links,
+// its region), then the regions' sums are scaled and spread over the coefficients.
+void probeBounceGeneric(const SparseLinks& links, size_t firstRow, uint32_t bins,
+                        const uint8_t* groupRegion, const glm::vec4* binSh, const glm::vec4* r,
+                        glm::vec4 out[kShCount]) {
+  glm::vec4 sums[kMaxProbeRegions];
+  for (uint32_t b = 0; b < bins; ++b) sums[b] = glm::vec4(0.0f);
+  const uint32_t* link = links.link.data();
+  const uint32_t mask = links.targetMask(), bits = links.targetBits;
+  const uint32_t begin = links.rowStart[firstRow], end = links.rowStart[firstRow + bins];
+#ifdef AFTERGLOW_SSE2
+  const __m128i bitsV = _mm_cvtsi32_si128(int(bits));
+  alignas(16) float w[4];
+  for (uint32_t k = begin; k < end; k += kLinkGroup) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(link + k));
+    _mm_store_ps(w, _mm_cvtepi32_ps(_mm_srl_epi32(v, bitsV)));
+    const __m128 s01 = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(w[0]), _mm_load_ps(&r[link[k] & mask].x)),
+                                  _mm_mul_ps(_mm_set1_ps(w[1]), _mm_load_ps(&r[link[k + 1] & mask].x)));
+    const __m128 s23 = _mm_add_ps(_mm_mul_ps(_mm_set1_ps(w[2]), _mm_load_ps(&r[link[k + 2] & mask].x)),
+                                  _mm_mul_ps(_mm_set1_ps(w[3]), _mm_load_ps(&r[link[k + 3] & mask].x)));
+    float* sum = &sums[groupRegion[k / kLinkGroup]].x;
+    _mm_storeu_ps(sum, _mm_add_ps(_mm_loadu_ps(sum), _mm_add_ps(s01, s23)));
+  }
+  __m128 acc[kShCount];
+  for (__m128& a : acc) a = _mm_setzero_ps();
+  for (uint32_t b = 0; b < bins; ++b) {
+    const __m128 wv = _mm_mul_ps(_mm_loadu_ps(&sums[b].x), _mm_set1_ps(links.rowScale[firstRow + b]));
+    const glm::vec4* y = binSh + size_t(b / 2) * kShCount * 2 + (b & 1);
+    for (int i = 0; i < kShCount; ++i)
+      acc[i] = _mm_add_ps(acc[i], _mm_mul_ps(_mm_load_ps(&y[2 * i].x), wv));
+  }
+  for (int i = 0; i < kShCount; ++i) _mm_storeu_ps(&out[i].x, acc[i]);
+#else
+  for (uint32_t k = begin; k < end; ++k)
+    sums[groupRegion[k / kLinkGroup]] += float(link[k] >> bits) * r[link[k] & mask];
+  for (int i = 0; i < kShCount; ++i) out[i] = glm::vec4(0.0f);
+  for (uint32_t b = 0; b < bins; ++b) {
+    const glm::vec4 w = sums[b] * links.rowScale[firstRow + b];
+    const glm::vec4* y = binSh + size_t(b / 2) * kShCount * 2 + (b & 1);
+    for (int i = 0; i < kShCount; ++i) out[i] += y[2 * i] * w;
+  }
+#endif
+}
+
+#ifdef AFTERGLOW_AVX2_DISPATCH
+// probeBounceGeneric with AVX2 and FMA: two links per multiply-add (R's two entries loaded
+// into one 8-lane vector, their weights spread over its halves by one permute), and two
+// regions per multiply-add over the coefficients.
+__attribute__((target("avx2,fma"))) void probeBounceAvx2(const SparseLinks& links, size_t firstRow,
+                                                         uint32_t bins, const uint8_t* groupRegion,
+                                                         const glm::vec4* binSh,
+                                                         const glm::vec4* r, glm::vec4 out[kShCount]) {
+  alignas(32) float sums[(kMaxProbeRegions + 1) * 4];  // a zero region after an odd last
+  for (uint32_t b = 0; b < bins + 1; b += 2) _mm256_store_ps(sums + 4 * b, _mm256_setzero_ps());
+  const uint32_t* link = links.link.data();
+  const uint32_t begin = links.rowStart[firstRow], end = links.rowStart[firstRow + bins];
+  const __m128i bits = _mm_cvtsi32_si128(int(links.targetBits));
+  const __m128i mask = _mm_set1_epi32(int(links.targetMask()));
+  const __m256i pair01 = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
+  const __m256i pair23 = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
+  const char* base = reinterpret_cast<const char*>(r);
+  for (uint32_t k = begin; k < end; k += kLinkGroup) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(link + k));
+    const __m256 w = _mm256_castps128_ps256(_mm_cvtepi32_ps(_mm_srl_epi32(v, bits)));
+    const __m128i offsets = _mm_slli_epi32(_mm_and_si128(v, mask), 4);  // bytes into R
+    const uint64_t lo = uint64_t(_mm_cvtsi128_si64(offsets));
+    const uint64_t hi = uint64_t(_mm_extract_epi64(offsets, 1));
+    const __m256 r01 = _mm256_insertf128_ps(
+        _mm256_castps128_ps256(_mm_load_ps(reinterpret_cast<const float*>(base + uint32_t(lo)))),
+        _mm_load_ps(reinterpret_cast<const float*>(base + (lo >> 32))), 1);
+    const __m256 r23 = _mm256_insertf128_ps(
+        _mm256_castps128_ps256(_mm_load_ps(reinterpret_cast<const float*>(base + uint32_t(hi)))),
+        _mm_load_ps(reinterpret_cast<const float*>(base + (hi >> 32))), 1);
+    const __m256 s = _mm256_fmadd_ps(_mm256_permutevar8x32_ps(w, pair01), r01,
+                                     _mm256_mul_ps(_mm256_permutevar8x32_ps(w, pair23), r23));
+    float* sum = sums + 4 * groupRegion[k / kLinkGroup];
+    _mm_store_ps(sum, _mm_add_ps(_mm_load_ps(sum), _mm_add_ps(_mm256_castps256_ps128(s),
+                                                                _mm256_extractf128_ps(s, 1))));
+  }
+  __m256 acc[kShCount];
+  for (__m256& a : acc) a = _mm256_setzero_ps();
+  const float* scale = links.rowScale.data() + firstRow;
+  for (uint32_t b = 0; b < bins; b += 2) {
+    const __m256 rowScale = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_set1_ps(scale[b])),
+                                                 _mm_set1_ps(b + 1 < bins ? scale[b + 1] : 0.0f), 1);
+    const __m256 w = _mm256_mul_ps(_mm256_load_ps(sums + 4 * b), rowScale);
+    const float* y = &binSh[size_t(b / 2) * kShCount * 2].x;
+    for (int i = 0; i < kShCount; ++i) acc[i] = _mm256_fmadd_ps(_mm256_loadu_ps(y + 8 * i), w, acc[i]);
+  }
+  for (int i = 0; i < kShCount; ++i)
+    _mm_storeu_ps(&out[i].x, _mm_add_ps(_mm256_castps256_ps128(acc[i]), _mm256_extractf128_ps(acc[i], 1)));
+}
+#endif
+
 }  // namespace
 
 void Solver::gatherRows(const SparseLinks& links, glm::vec4* gathered) {
@@ -191,21 +331,8 @@ void Solver::probeRadiance(size_t first, size_t count, ShL2* out) const {
   forBlocks(count, [&](size_t begin, size_t end) {
     for (size_t k = begin; k < end; ++k) {
       const size_t p = first + k;
-      // Bounced light, region by region: each region's mean radiance (a row of links) spread
-      // over the nine coefficients by the region's weights, four channels at a time.
       glm::vec4 acc[kShCount];
-      for (glm::vec4& a : acc) a = glm::vec4(0.0f);
-      for (uint32_t b = 0; b < bins; ++b) {
-        const glm::vec4 w = linkRow(probes.links, p * bins + b, r);
-        const float* y = &probes.binSh[size_t(b) * kShCount];
-#ifdef AFTERGLOW_SSE2
-        const __m128 wv = _mm_loadu_ps(&w.x);
-        for (int i = 0; i < kShCount; ++i)
-          _mm_storeu_ps(&acc[i].x, _mm_add_ps(_mm_loadu_ps(&acc[i].x), _mm_mul_ps(_mm_set1_ps(y[i]), wv)));
-#else
-        for (int i = 0; i < kShCount; ++i) acc[i] += y[i] * w;
-#endif
-      }
+      probeBounce_(probes.links, p * bins, bins, probeGroupRegion_.data(), probeBinSh_.data(), r, acc);
       ShL2 sh;
       for (int i = 0; i < kShCount; ++i) sh.c[i] = indirect * glm::vec3(acc[i]);
       for (size_t s = 0; s < data_.sources.size(); ++s) {

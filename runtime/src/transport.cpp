@@ -326,8 +326,8 @@ std::string TransportData::validate() const {
         return why.str();
       }
     if (std::string bad = checkProbeTetrahedra(probes.mesh); !bad.empty()) return "probes: " + bad;
-    if (probes.bins == 0 || probes.bins > 4096) {
-      why << "probes: " << probes.bins << " regions per probe (1 to 4096)";
+    if (probes.bins == 0 || probes.bins > kMaxProbeRegions) {
+      why << "probes: " << probes.bins << " regions per probe (1 to " << kMaxProbeRegions << ")";
       return why.str();
     }
     if (probes.binSh.size() != size_t(probes.bins) * kShCount)

@@ -168,19 +168,19 @@ TransportData makeScene(uint32_t scale = 1, uint64_t seed = 7) {
   for (int i = 0; i < kShCount; ++i) d.skySh[i] = glm::vec3(0.2f, 0.3f, 0.5f) * (i == 0 ? 1.0f : 0.1f);
   d.indirectIntensity = 1.0f;
   d.albedoBoost = 1.0f;
-  // Five light probes in two tetrahedra, two regions each, seeing random clusters, the sky and
-  // every source.
+  // Five light probes in two tetrahedra, three regions each (an odd count: the runtime pairs
+  // regions), seeing random clusters (one region none), the sky and every source.
   ProbeTransport& probes = d.probes;
   probes.mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
   probes.mesh.tetrahedra = {{0, 1, 2, 3}, {1, 4, 2, 3}};
   probes.mesh.neighbours = {{1, -1, -1, -1}, {-1, 0, -1, -1}};
-  probes.bins = 2;
+  probes.bins = 3;
   for (uint32_t k = 0; k < probes.bins * kShCount; ++k) probes.binSh.push_back(rng.unit() - 0.3f);
   probes.links = SparseLinks(d.clusterCount);
   for (uint32_t r = 0; r < 5 * probes.bins; ++r) {
     cols.clear();
     w.clear();
-    for (uint32_t c = rng.below(4); c < d.clusterCount; c += 1 + rng.below(5)) {
+    for (uint32_t c = rng.below(4); c < d.clusterCount && r != 4; c += 1 + rng.below(5)) {
       cols.push_back(c);
       w.push_back(0.05f + 0.1f * rng.unit());
     }
@@ -664,35 +664,42 @@ TEST(RuntimeApi, ReadsSeeWholeFramesWhileUpdating) {
 // A probe's SH from the runtime equals the transfer written out by hand: the sources scaled by
 // colour × intensity (emission for the lamp), the sky through K, and the regions' rows of links
 // over the clusters' reflected light, scaled by the indirect intensity.
+// Both kernels of the probes' refresh (AVX2 where the CPU has it, and the baseline's, which
+// AFTERGLOW_NO_AVX2 selects) against the transfer summed by hand.
 TEST(RuntimeApi, ProbeShIsTheTransferSummedByHand) {
   TransportData d = makeScene();
   d.indirectIntensity = 0.75f;
-  Solver solver(d);
-  solver.solve({4, 0.0f});
-  std::vector<ShL2> sh(d.probes.count());
-  solver.probeRadiance(0, sh.size(), sh.data());
-  const std::vector<glm::vec3>& r = solver.clusterReflected();
-  for (size_t p = 0; p < d.probes.count(); ++p) {
-    for (int i = 0; i < kShCount; ++i) {
-      glm::dvec3 want(0.0);
-      for (const Source& s : d.sources) {
-        const glm::vec3 scale =
-            s.kind == SourceKind::Emissive ? d.materials[s.material].emission : s.color * s.intensity;
-        want += glm::dvec3(scale) * double(s.probeTransfer[p * kShCount + size_t(i)]);
+  for (const bool baseline : {false, true}) {
+    SCOPED_TRACE(baseline ? "baseline kernel" : "the CPU's best kernel");
+    if (baseline) setenv("AFTERGLOW_NO_AVX2", "1", 1);
+    Solver solver(d);
+    unsetenv("AFTERGLOW_NO_AVX2");
+    solver.solve({4, 0.0f});
+    std::vector<ShL2> sh(d.probes.count());
+    solver.probeRadiance(0, sh.size(), sh.data());
+    const std::vector<glm::vec3>& r = solver.clusterReflected();
+    for (size_t p = 0; p < d.probes.count(); ++p) {
+      for (int i = 0; i < kShCount; ++i) {
+        glm::dvec3 want(0.0);
+        for (const Source& s : d.sources) {
+          const glm::vec3 scale =
+              s.kind == SourceKind::Emissive ? d.materials[s.material].emission : s.color * s.intensity;
+          want += glm::dvec3(scale) * double(s.probeTransfer[p * kShCount + size_t(i)]);
+        }
+        for (int j = 0; j < kShCount; ++j)
+          want += glm::dvec3(d.skySh[j]) *
+                  double(halfToFloat(d.probes.sky[p * kProbeSkyCount + size_t(probeSkyIndex(i, j))]));
+        for (uint32_t b = 0; b < d.probes.bins; ++b) {
+          const size_t row = p * d.probes.bins + b;
+          glm::dvec3 gathered(0.0);
+          for (size_t k = d.probes.links.rowStart[row]; k < d.probes.links.rowStart[row + 1]; ++k)
+            gathered += double(d.probes.links.weightAt(row, k)) * glm::dvec3(r[d.probes.links.targetAt(k)]);
+          want += 0.75 * double(d.probes.binSh[b * kShCount + size_t(i)]) * gathered;
+        }
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(sh[p].c[i][c], want[c], 1e-5 * (1.0 + std::abs(want[c])))
+              << "probe " << p << " coefficient " << i;
       }
-      for (int j = 0; j < kShCount; ++j)
-        want += glm::dvec3(d.skySh[j]) *
-                double(halfToFloat(d.probes.sky[p * kProbeSkyCount + size_t(probeSkyIndex(i, j))]));
-      for (uint32_t b = 0; b < d.probes.bins; ++b) {
-        const size_t row = p * d.probes.bins + b;
-        glm::dvec3 gathered(0.0);
-        for (size_t k = d.probes.links.rowStart[row]; k < d.probes.links.rowStart[row + 1]; ++k)
-          gathered += double(d.probes.links.weightAt(row, k)) * glm::dvec3(r[d.probes.links.targetAt(k)]);
-        want += 0.75 * double(d.probes.binSh[b * kShCount + size_t(i)]) * gathered;
-      }
-      for (int c = 0; c < 3; ++c)
-        EXPECT_NEAR(sh[p].c[i][c], want[c], 1e-5 * (1.0 + std::abs(want[c])))
-            << "probe " << p << " coefficient " << i;
     }
   }
   // Sampled at a probe, the runtime returns that probe; between them, a convex mix.

@@ -193,6 +193,9 @@ constexpr int probeSkyIndex(int i, int j) {
 // one row of ordinary links a region instead of nine SH-weighted links a cluster, and the
 // bounce's own inner loop. Direct light (lights, emissive surfaces) and the sky are projected
 // ray by ray, exactly.
+// The most regions a probe's rays are stratified in (the runtime numbers them in a byte).
+constexpr uint32_t kMaxProbeRegions = 255;
+
 struct ProbeTransport {
   ProbeTetrahedra mesh;        // positions, Delaunay tetrahedra, their neighbours
   uint32_t bins = 0;           // regions per probe (0 without probes)
