@@ -106,7 +106,7 @@ class ProbeTracer {
     return Status::ok();
   }
 
-  // Fetches probe p's hit texels' cluster and far clusters into the cache, ahead of readRays.
+  // Fetches a probe's hit texels' clusters and far clusters into the cache, ahead of readRays.
   void prefetch(const GatherBatch& batch, size_t base, size_t stride) const {
     for (uint32_t r = 0; r < dirs_.rays; ++r) {
       const uint32_t code = batch.codes()[base + r * stride];
@@ -114,19 +114,20 @@ class ProbeTracer {
       const uint32_t t = code & TexelGather::kTexelMask;
       __builtin_prefetch(&clusters_.texelCluster[t]);
       if (code & TexelGather::kBackSide) continue;
-      __builtin_prefetch(&texels_.position[t]);
       for (const std::vector<uint32_t>& level : far_.ofTexel) __builtin_prefetch(&level[t]);
     }
   }
 
-  // Reads probe p's rays: ray r at base + r × stride of the batch.
-  void readRays(const GatherBatch& batch, size_t base, size_t stride, size_t p, ProbeResult& res,
+  // Reads a probe's rays: ray r at base + r × stride of the batch.
+  void readRays(const GatherBatch& batch, size_t base, size_t stride, ProbeResult& res,
                 std::vector<uint32_t>& targets, std::vector<float>& weights) const {
-    const glm::vec3 origin = positions_[p];
     uint32_t hits = 0;
     // Region by region (the directions are in region order): its rays' targets, sorted, then
     // counted into the region's row; a hit weighs 1 / (the region's rays) in the region's mean.
     res.rows = runtime::SparseLinks(targetCount_);
+    res.rows.rowStart.reserve(dirs_.regions + 1);  // one allocation each, not a dozen
+    res.rows.rowScale.reserve(dirs_.regions);
+    res.rows.link.reserve(dirs_.rays + (runtime::kLinkGroup - 1) * dirs_.regions);
     for (uint32_t b = 0, r = 0; b < dirs_.regions; ++b) {
       targets.clear();
       for (const uint32_t end = r + dirs_.raysOfRegion[b]; r < end; ++r) {
@@ -142,8 +143,9 @@ class ProbeTracer {
         if (code & TexelGather::kBackSide) {
           target = clusters_.texelBackCluster.empty() ? kNoTexel : clusters_.texelBackCluster[t];
         } else {
-          const glm::vec3 d = texels_.position[t] - origin;
-          if (!far_.empty()) target = far_.of(t, glm::dot(d, d));
+          // (The hit's distance, not its texel's sample's: the same within a texel, and no
+          // cache miss.)
+          if (!far_.empty()) target = far_.of(t, hit.t * hit.t);
           if (target == kNoTexel) target = clusters_.texelCluster[t];
         }
         if (target != kNoTexel) targets.push_back(target);
@@ -364,7 +366,7 @@ Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
         if (p + 1 < last) probes.prefetch(batch, p + 1 - first, n);
         ProbeResult& res = results[p];
         res.source.assign(sourceCount * kShCount, 0.0);
-        probes.readRays(batch, p - first, n, p, res, targets, weights);
+        probes.readRays(batch, p - first, n, res, targets, weights);
         probes.sourceSamples(p, res, shadows);
       }
       progress.advance(n);
