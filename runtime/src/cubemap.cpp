@@ -1,0 +1,138 @@
+#include "afterglow/runtime/cubemap.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace afterglow::runtime {
+
+namespace {
+
+// The unnormalised direction of face coordinates a, b ∈ [−1, 1] (the header's table).
+glm::vec3 facePlanePoint(int face, float a, float b) {
+  switch (face) {
+    case kCubeFacePosX: return {1.0f, -b, a};
+    case kCubeFaceNegX: return {-1.0f, -b, -a};
+    case kCubeFacePosY: return {a, 1.0f, -b};
+    case kCubeFaceNegY: return {a, -1.0f, b};
+    case kCubeFacePosZ: return {-a, -b, 1.0f};
+    default: return {a, -b, -1.0f};
+  }
+}
+
+// The antiderivative of the face plane's solid-angle element at (s, t).
+double areaElement(double s, double t) { return std::atan2(s * t, std::sqrt(s * s + t * t + 1.0)); }
+
+// Bilinear within one face at (u, v), the texels beyond its edges clamped to it.
+glm::vec3 sampleFaceClamped(const Cubemap& cube, const CubeFaceUv& p) {
+  const int n = cube.size;
+  const float fx = std::clamp(p.u * float(n) - 0.5f, 0.0f, float(n - 1));
+  const float fy = std::clamp(p.v * float(n) - 0.5f, 0.0f, float(n - 1));
+  const int x0 = std::min(int(fx), n - 1);
+  const int y0 = std::min(int(fy), n - 1);
+  const int x1 = std::min(x0 + 1, n - 1);
+  const int y1 = std::min(y0 + 1, n - 1);
+  const float wx = fx - float(x0);
+  const float wy = fy - float(y0);
+  const glm::vec3 top = glm::mix(cube.at(p.face, x0, y0), cube.at(p.face, x1, y0), wx);
+  const glm::vec3 bottom = glm::mix(cube.at(p.face, x0, y1), cube.at(p.face, x1, y1), wx);
+  return glm::mix(top, bottom, wy);
+}
+
+}  // namespace
+
+Cubemap makeCubemap(int size, glm::vec3 value) {
+  Cubemap cube;
+  cube.size = std::max(size, 0);
+  cube.texels.assign(size_t(kCubeFaceCount) * size_t(cube.size) * size_t(cube.size), value);
+  return cube;
+}
+
+glm::vec3 cubemapDirection(int face, float u, float v) {
+  return glm::normalize(facePlanePoint(face, 2.0f * u - 1.0f, 2.0f * v - 1.0f));
+}
+
+glm::vec3 cubemapTexelDirection(int face, int x, int y, int size) {
+  const float inv = 1.0f / float(size);
+  return cubemapDirection(face, (float(x) + 0.5f) * inv, (float(y) + 0.5f) * inv);
+}
+
+CubeFaceUv cubemapFaceUv(glm::vec3 dir) {
+  const glm::vec3 m = glm::abs(dir);
+  CubeFaceUv out;
+  float a = 0.0f;
+  float b = 0.0f;
+  // The inverse of facePlanePoint: divide by the major component's magnitude.
+  if (m.x >= m.y && m.x >= m.z) {
+    if (m.x == 0.0f) return {kCubeFacePosX, 0.5f, 0.5f};  // the zero vector: anything valid
+    const float inv = 1.0f / m.x;
+    out.face = dir.x > 0.0f ? kCubeFacePosX : kCubeFaceNegX;
+    a = (dir.x > 0.0f ? dir.z : -dir.z) * inv;
+    b = -dir.y * inv;
+  } else if (m.y >= m.z) {
+    const float inv = 1.0f / m.y;
+    out.face = dir.y > 0.0f ? kCubeFacePosY : kCubeFaceNegY;
+    a = dir.x * inv;
+    b = (dir.y > 0.0f ? -dir.z : dir.z) * inv;
+  } else {
+    const float inv = 1.0f / m.z;
+    out.face = dir.z > 0.0f ? kCubeFacePosZ : kCubeFaceNegZ;
+    a = (dir.z > 0.0f ? -dir.x : dir.x) * inv;
+    b = -dir.y * inv;
+  }
+  out.u = 0.5f * (a + 1.0f);
+  out.v = 0.5f * (b + 1.0f);
+  return out;
+}
+
+CubeTexel cubemapTexel(glm::vec3 dir, int size) {
+  const CubeFaceUv p = cubemapFaceUv(dir);
+  CubeTexel t;
+  t.face = p.face;
+  t.x = std::clamp(int(std::floor(p.u * float(size))), 0, size - 1);
+  t.y = std::clamp(int(std::floor(p.v * float(size))), 0, size - 1);
+  return t;
+}
+
+float cubemapTexelSolidAngle(int x, int y, int size) {
+  // In double: the four terms nearly cancel for small texels, and the sum over a large cube
+  // must reach 4π to 1e-5.
+  const double inv = 2.0 / double(size);
+  const double s0 = double(x) * inv - 1.0;
+  const double s1 = double(x + 1) * inv - 1.0;
+  const double t0 = double(y) * inv - 1.0;
+  const double t1 = double(y + 1) * inv - 1.0;
+  return float(areaElement(s1, t1) - areaElement(s0, t1) - areaElement(s1, t0) +
+               areaElement(s0, t0));
+}
+
+glm::vec3 sampleCubemap(const Cubemap& cube, glm::vec3 dir) {
+  if (cube.size <= 0) return glm::vec3(0.0f);
+  const int n = cube.size;
+  const CubeFaceUv p = cubemapFaceUv(dir);
+  // Continuous texel coordinates with texel centres at integers.
+  const float fx = p.u * float(n) - 0.5f;
+  const float fy = p.v * float(n) - 0.5f;
+  const int x0 = int(std::floor(fx));
+  const int y0 = int(std::floor(fy));
+  const float wx = fx - float(x0);
+  const float wy = fy - float(y0);
+  const float inv = 1.0f / float(n);
+
+  auto fetch = [&](int x, int y) -> glm::vec3 {
+    if (x >= 0 && x < n && y >= 0 && y < n) return cube.at(p.face, x, y);
+    // Beyond the face: the radiance at the centre of the virtual texel on the extended face
+    // plane, half a texel past the edge. It projects onto the neighbouring face about half a
+    // texel inside it, across the edge from a texel centre, but along the edge it is pulled
+    // toward the face's centre by up to half a texel near a corner; so it is read bilinearly
+    // there (clamped to that face), not from the texel it falls in.
+    const glm::vec3 d = facePlanePoint(p.face, 2.0f * (float(x) + 0.5f) * inv - 1.0f,
+                                       2.0f * (float(y) + 0.5f) * inv - 1.0f);
+    return sampleFaceClamped(cube, cubemapFaceUv(d));
+  };
+
+  const glm::vec3 top = glm::mix(fetch(x0, y0), fetch(x0 + 1, y0), wx);
+  const glm::vec3 bottom = glm::mix(fetch(x0, y0 + 1), fetch(x0 + 1, y0 + 1), wx);
+  return glm::mix(top, bottom, wy);
+}
+
+}  // namespace afterglow::runtime
