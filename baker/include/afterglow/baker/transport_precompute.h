@@ -117,14 +117,14 @@ struct ProbeOptions {
   // (probe_directions.h). Bounced light is gathered per region, binsSide² blocks of cells (at
   // least 2 × 2 cells; square when binsSide divides raysSide, which fits best): more regions
   // follow bounced light's direction more closely but make more links and a slower refresh.
-  // The README's table: McGuire's box against the reference (SH L2) 18/6 2.8%, 16/4 4.9%;
-  // Sponza's refresh per 10,000 probes 2.8 and 2.2 ms, its precompute 21% and 18% of the bake;
-  // 16² rays take the glTF furnace's probes 1.2% off, 18² 0.85%.
-  int raysSide = 18;
-  int binsSide = 6;
+  // The README's table: McGuire's box against the reference (SH L2) 16/8 2.6%, 18/6 2.9%,
+  // 16/4 4.9%; Sponza's precompute 18% and 21% of the bake, its refresh per 10,000 probes
+  // 2.9-3.1 and 2.8-3.1 ms (64 regions against 36).
+  int raysSide = 16;
+  int binsSide = 8;
   // Emissive surfaces seen by a probe: this many points chosen by area on each emissive
-  // material, combined with the probe's rays that hit them (balance heuristic), so small lamps
-  // and emissive walls are both well sampled.
+  // material, combined with the probe's rays that hit them (power heuristic, see
+  // probe_transfer.cpp), so small lamps and emissive walls are both well sampled.
   int emitterSamples = 256;
   // Shadow rays toward a light with a size (the sun's disk, a sphere light): a probe's soft
   // shadow needs fewer than a texel's.
