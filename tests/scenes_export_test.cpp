@@ -306,6 +306,98 @@ TEST(GltfImport, BadProbeVolumeIsAnError) {
   }
 }
 
+// extras.afterglow.reflectionProbe survives a round trip: the node's turn, the box and every
+// setting; a probe without a size keeps none (the bake fits it).
+TEST(GltfExport, ReflectionProbeRoundTrip) {
+  Scene scene = decoratedCornellBox();
+  ReflectionProbe hall;
+  hall.name = "hall_reflection";
+  hall.transform = glm::mat4(0.8f, 0.0f, -0.6f, 0.0f,  // 36.87 degrees about +Y
+                             0.0f, 1.0f, 0.0f, 0.0f,
+                             0.6f, 0.0f, 0.8f, 0.0f,
+                             1.5f, 2.0f, -3.0f, 1.0f);
+  hall.size = glm::vec3(8.0f, 4.0f, 2.5f);
+  hall.blendDistance = 0.5f;
+  hall.importance = 3;
+  hall.boxProjection = false;
+  hall.resolution = 256;
+  ReflectionProbe fitted;
+  fitted.name = "fitted";
+  scene.reflectionProbes = {hall, fitted};
+  const std::string dir = test::tempDir("export_reflection_probe");
+  ASSERT_TRUE(saveGltf(scene, dir + "/rp.gltf").isOk());
+  Result<Scene> back = loadGltf(dir + "/rp.gltf");
+  ASSERT_TRUE(back.isOk()) << back.message();
+  ASSERT_EQ(back->reflectionProbes.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const ReflectionProbe& x = scene.reflectionProbes[i];
+    const ReflectionProbe& y = back->reflectionProbes[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_GE(y.node, 0);
+    EXPECT_EQ(x.size, y.size) << x.name;
+    EXPECT_EQ(x.blendDistance, y.blendDistance) << x.name;
+    EXPECT_EQ(x.importance, y.importance) << x.name;
+    EXPECT_EQ(x.boxProjection, y.boxProjection) << x.name;
+    EXPECT_EQ(x.resolution, y.resolution) << x.name;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) EXPECT_NEAR(x.transform[c][r], y.transform[c][r], 1e-6f) << x.name;
+  }
+  EXPECT_EQ(back->instances.size(), scene.instances.size());  // no mesh on the probes' nodes
+}
+
+// `{}` takes every default; a malformed member is an import error naming the file, the node
+// and the member, on one line.
+TEST(GltfImport, ReflectionProbeDefaultsAndBadMembers) {
+  const std::string dir = test::tempDir("import_reflection_probe");
+  auto write = [&](const std::string& name, const std::string& probe) {
+    const std::string path = dir + "/" + name + ".gltf";
+    std::ofstream(path) << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+      "nodes": [{"name": "nave_reflection", "translation": [1, 2, 3],
+                 "extras": {"afterglow": {"reflectionProbe": )" << probe << "}}}]}";
+    return path;
+  };
+  Result<Scene> plain = loadGltf(write("plain", "{}"));
+  ASSERT_TRUE(plain.isOk()) << plain.message();
+  ASSERT_EQ(plain->reflectionProbes.size(), 1u);
+  const ReflectionProbe defaults;
+  const ReflectionProbe& p = plain->reflectionProbes[0];
+  EXPECT_EQ(p.name, "nave_reflection");
+  EXPECT_EQ(p.size, glm::vec3(0.0f));
+  EXPECT_EQ(p.blendDistance, defaults.blendDistance);
+  EXPECT_EQ(p.importance, defaults.importance);
+  EXPECT_EQ(p.boxProjection, defaults.boxProjection);
+  EXPECT_EQ(p.resolution, defaults.resolution);
+  EXPECT_EQ(glm::vec3(p.transform[3]), glm::vec3(1.0f, 2.0f, 3.0f));
+  Result<Scene> set = loadGltf(write("set", R"({"size": [6, 3, 4], "blendDistance": 0,
+      "importance": -2, "boxProjection": false, "resolution": 64})"));
+  ASSERT_TRUE(set.isOk()) << set.message();
+  ASSERT_EQ(set->reflectionProbes.size(), 1u);
+  EXPECT_EQ(set->reflectionProbes[0].size, glm::vec3(6.0f, 3.0f, 4.0f));
+  EXPECT_EQ(set->reflectionProbes[0].blendDistance, 0.0f);
+  EXPECT_EQ(set->reflectionProbes[0].importance, -2);
+  EXPECT_FALSE(set->reflectionProbes[0].boxProjection);
+  EXPECT_EQ(set->reflectionProbes[0].resolution, 64);
+  const std::pair<const char*, const char*> bad[] = {
+      {R"(7)", "not an object"},
+      {R"({"size": [0, 1, 1]})", "size"},
+      {R"({"size": [1, 1]})", "size"},
+      {R"({"blendDistance": -1})", "blendDistance"},
+      {R"({"blendDistance": "soft"})", "blendDistance"},
+      {R"({"importance": 1.5})", "importance"},
+      {R"({"boxProjection": 1})", "boxProjection"},
+      {R"({"resolution": 100})", "resolution"},
+      {R"({"resolution": 4096})", "resolution"}};
+  for (const auto& [probe, member] : bad) {
+    const std::string path = write("bad", probe);
+    Result<Scene> r = loadGltf(path);
+    ASSERT_FALSE(r.isOk()) << probe;
+    EXPECT_NE(r.message().find(path), std::string::npos) << r.message();
+    EXPECT_NE(r.message().find("nave_reflection"), std::string::npos) << r.message();
+    EXPECT_NE(r.message().find(member), std::string::npos) << r.message();
+    EXPECT_EQ(r.message().find('\n'), std::string::npos) << r.message();
+  }
+}
+
 // The emission side survives a round trip (bake --single-sided-emission writes it for render
 // and relight to follow), and the obsolete doubleSidedEmission of earlier versions is ignored
 // with a warning that names the file and material.

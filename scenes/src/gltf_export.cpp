@@ -407,6 +407,19 @@ struct Exporter {
       node["extras"]["afterglow"]["probeVolume"] = std::move(pv);
       nodes.push_back(std::move(node));
     }
+    // Reflection probes likewise, every member written (a reader sees the values in force).
+    for (const ReflectionProbe& probe : scene.reflectionProbes) {
+      json node;
+      if (!probe.name.empty()) node["name"] = probe.name;
+      if (probe.transform != glm::mat4(1.0f)) node["matrix"] = matrix(probe.transform);
+      json rp = {{"blendDistance", num(probe.blendDistance)},
+                 {"importance", probe.importance},
+                 {"boxProjection", probe.boxProjection},
+                 {"resolution", probe.resolution}};
+      if (probe.size != glm::vec3(0.0f)) rp["size"] = vec(probe.size);
+      node["extras"]["afterglow"]["reflectionProbe"] = std::move(rp);
+      nodes.push_back(std::move(node));
+    }
 
     json lights = json::array();
     const Light defaults;

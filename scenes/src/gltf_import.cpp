@@ -243,6 +243,26 @@ void findExtensionCarriers(const nlohmann::json& value, const std::string& where
   }
 }
 
+// The nodes whose extras.afterglow.reflectionProbe is an empty object: `{}` asks for every
+// default, but tinygltf drops empty objects from extras, so they are found in the raw JSON.
+std::set<size_t> defaultReflectionProbes(const nlohmann::json& root) {
+  std::set<size_t> out;
+  if (!root.is_object()) return out;
+  auto nodes = root.find("nodes");
+  if (nodes == root.end() || !nodes->is_array()) return out;
+  for (size_t i = 0; i < nodes->size(); ++i) {
+    const nlohmann::json& node = (*nodes)[i];
+    if (!node.is_object()) continue;
+    auto extras = node.find("extras");
+    if (extras == node.end() || !extras->is_object()) continue;
+    auto ag = extras->find("afterglow");
+    if (ag == extras->end() || !ag->is_object()) continue;
+    auto rp = ag->find("reflectionProbe");
+    if (rp != ag->end() && rp->is_object() && rp->empty()) out.insert(i);
+  }
+  return out;
+}
+
 // The carriers of every extension the file requires that afterglow does not support.
 ExtensionCarriers unsupportedRequiredExtensions(const nlohmann::json& root) {
   ExtensionCarriers carriers;
@@ -319,12 +339,14 @@ struct PendingTexture {
 class Importer {
  public:
   Importer(const tinygltf::Model& model, const std::string& file, const std::string& baseDir,
-           const LoadOptions& options, const ExtensionCarriers& carriers, Scene& scene)
+           const LoadOptions& options, const ExtensionCarriers& carriers,
+           const std::set<size_t>& defaultReflectionProbes, Scene& scene)
       : model_(model),
         file_(file),
         baseDir_(baseDir),
         options_(options),
         carriers_(carriers),
+        defaultReflectionProbes_(defaultReflectionProbes),
         scene_(scene) {}
 
   Status run() {
@@ -1182,6 +1204,63 @@ class Importer {
     return Status::ok();
   }
 
+  // extras.afterglow.reflectionProbe = {"size": [x, y, z], "blendDistance": d, "importance": i,
+  // "boxProjection": b, "resolution": n}, every member optional (not inherited). A malformed
+  // member is an error naming it: a probe that silently took a default would light the wrong
+  // region or blur the wrong way, and the level designer would not know why.
+  Status readReflectionProbe(const tinygltf::Node& node, size_t index, const std::string& where,
+                             const glm::dmat4& world) {
+    const tinygltf::Value* ag = member(node.extras, "afterglow");
+    const tinygltf::Value* rp = ag ? member(*ag, "reflectionProbe") : nullptr;
+    const bool allDefaults = !rp && defaultReflectionProbes_.count(index);
+    if (!rp && !allDefaults) return Status::ok();
+    const std::string key = where + ": extras.afterglow.reflectionProbe";
+    static const tinygltf::Value kEmpty{tinygltf::Value::Object()};
+    if (allDefaults) rp = &kEmpty;
+    if (!rp->IsObject()) return fail(key + " is not an object");
+    ReflectionProbe probe;
+    probe.name = node.name.empty() ? format("node%zu", index) : node.name;
+    probe.node = int(index);
+    probe.transform = narrowMat(world);
+    if (const tinygltf::Value* size = member(*rp, "size")) {
+      bool ok = size->IsArray() && size->ArrayLen() == 3;
+      for (int i = 0; ok && i < 3; ++i) {
+        const tinygltf::Value& c = size->Get(i);
+        const double v = c.IsNumber() ? c.GetNumberAsDouble() : -1.0;
+        ok = std::isfinite(v) && v > 0.0 && v < 1e9;
+        if (ok) probe.size[i] = float(v);
+      }
+      if (!ok) return fail(key + ".size must be 3 positive finite numbers");
+    }
+    if (const tinygltf::Value* v = member(*rp, "blendDistance")) {
+      const double d = v->IsNumber() ? v->GetNumberAsDouble() : -1.0;
+      if (!(std::isfinite(d) && d >= 0.0 && d < 1e9))
+        return fail(key + ".blendDistance must be a number of metres >= 0");
+      probe.blendDistance = float(d);
+    }
+    if (const tinygltf::Value* v = member(*rp, "importance")) {
+      const double i = v->IsNumber() ? v->GetNumberAsDouble() : 0.5;
+      if (!(std::isfinite(i) && i == std::floor(i) && std::abs(i) <= 1e6))
+        return fail(key + ".importance must be a whole number");
+      probe.importance = int(i);
+    }
+    if (const tinygltf::Value* v = member(*rp, "boxProjection")) {
+      if (!v->IsBool()) return fail(key + ".boxProjection must be true or false");
+      probe.boxProjection = v->Get<bool>();
+    }
+    if (const tinygltf::Value* v = member(*rp, "resolution")) {
+      const double n = v->IsNumber() ? v->GetNumberAsDouble() : 0.0;
+      const bool powerOfTwo = n >= 8.0 && n <= 2048.0 && n == std::floor(n) &&
+                              (int(n) & (int(n) - 1)) == 0;
+      if (!powerOfTwo) return fail(key + ".resolution must be a power of two from 8 to 2048");
+      probe.resolution = int(n);
+    }
+    if (!std::isfinite(glm::determinant(world)) || std::abs(glm::determinant(world)) < 1e-30)
+      return fail(key + " is on a node whose transform has no volume");
+    scene_.reflectionProbes.push_back(std::move(probe));
+    return Status::ok();
+  }
+
   // extras.afterglow.lightmap: where `afterglow uv` put this node's lightmap (not inherited).
   LightmapLocation readLightmap(const tinygltf::Node& node, const std::string& where) {
     LightmapLocation location;
@@ -1366,6 +1445,7 @@ class Importer {
         meshes.insert(node.mesh);
       }
       if (Status pv = readProbeVolume(node, index, where, world); !pv) return pv;
+      if (Status rp = readReflectionProbe(node, index, where, world); !rp) return rp;
       if (node.camera >= 0) placeCamera(node.camera, world, index, where);
       auto lights = node.extensions.find("KHR_lights_punctual");
       if (lights != node.extensions.end()) {
@@ -1391,6 +1471,7 @@ class Importer {
   std::string baseDir_;
   LoadOptions options_;
   const ExtensionCarriers& carriers_;  // unsupported required extensions' carriers
+  const std::set<size_t>& defaultReflectionProbes_;  // nodes with reflectionProbe: {}
   Scene& scene_;
   std::vector<int> usedMeshes_;
   std::map<TextureKey, int> textureSlots_;
@@ -1414,6 +1495,7 @@ Result<Scene> loadGltfFromMemory(const std::string& bytes, const std::string& na
                                        file.c_str(), kMaxJsonDepth));
 
   ExtensionCarriers carriers;
+  std::set<size_t> reflectionDefaults;
   {
     // Parsed here for the checks tinygltf does not make, and freed before tinygltf parses it.
     const nlohmann::json root = nlohmann::json::parse(
@@ -1421,6 +1503,7 @@ Result<Scene> loadGltfFromMemory(const std::string& bytes, const std::string& na
     Status images = checkImageBufferViews(root, file);
     if (!images) return images;
     carriers = unsupportedRequiredExtensions(root);
+    reflectionDefaults = defaultReflectionProbes(root);
   }
 
   tinygltf::TinyGLTF loader;
@@ -1452,7 +1535,7 @@ Result<Scene> loadGltfFromMemory(const std::string& bytes, const std::string& na
 
   Scene scene;
   scene.sourcePath = nameForMessages;
-  Importer importer(model, file, baseDir, options, carriers, scene);
+  Importer importer(model, file, baseDir, options, carriers, reflectionDefaults, scene);
   Status s;
   try {
     s = importer.run();

@@ -169,6 +169,21 @@ struct ProbeVolume {
   float spacing = 0.0f;           // "spacing": metres; 0 = the placement's own
 };
 
+// extras.afterglow.reflectionProbe on a glTF node: a reflection probe captured at the node's
+// origin, lighting an influence box centred on the node and turned by its world transform.
+// `{}` takes every default (the box then fitted to the surrounding walls by the bake).
+struct ReflectionProbe {
+  std::string name;               // the node's name (or "node<i>")
+  int node = -1;
+  glm::mat4 transform{1.0f};      // node to world
+  glm::vec3 size{0.0f};           // "size": metres along the node's axes (before its scale);
+                                  //   0 = fitted by the bake
+  float blendDistance = 1.0f;     // "blendDistance": metres inside the box over which it fades
+  int importance = 1;             // "importance": a higher one wins where boxes overlap
+  bool boxProjection = true;      // "boxProjection": parallax-corrected lookups
+  int resolution = 128;           // "resolution": cubemap face size, texels (a power of two)
+};
+
 struct Bounds {
   glm::vec3 min{1e30f};
   glm::vec3 max{-1e30f};
@@ -186,6 +201,7 @@ struct Scene {
   std::vector<Light> lights;
   std::vector<Camera> cameras;
   std::vector<ProbeVolume> probeVolumes;
+  std::vector<ReflectionProbe> reflectionProbes;
   std::vector<std::string> warnings;  // everything the loader skipped or fixed up
 
   // The material of a primitive, or the glTF default material for -1.
