@@ -48,6 +48,30 @@ void expectMatNear(const glm::mat4& a, const glm::mat4& b, float tol, const std:
 }
 
 // The Cornell box plus everything the exporter must carry that the procedural scene lacks.
+// A node's world transform turned 36.87 degrees about +Y and moved: what a round trip of a
+// node-placed box must keep.
+const glm::mat4 kTurnedNode(0.8f, 0.0f, -0.6f, 0.0f,
+                            0.0f, 1.0f, 0.0f, 0.0f,
+                            0.6f, 0.0f, 0.8f, 0.0f,
+                            1.5f, 2.0f, -3.0f, 1.0f);
+
+void expectSameTransform(const glm::mat4& a, const glm::mat4& b, const std::string& name) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) EXPECT_NEAR(a[c][r], b[c][r], 1e-6f) << name;
+}
+
+// A glTF of one node named `node` at (1, 2, 3) with extras.afterglow.<key> = `value` (JSON
+// text), written to DIR/NAME.gltf; returns its path.
+std::string writeNodeExtras(const std::string& dir, const std::string& name,
+                            const std::string& node, const std::string& key,
+                            const std::string& value) {
+  const std::string path = dir + "/" + name + ".gltf";
+  std::ofstream(path) << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+    "nodes": [{"name": ")" << node << R"(", "translation": [1, 2, 3],
+               "extras": {"afterglow": {")" << key << R"(": )" << value << "}}}]}";
+  return path;
+}
+
 Scene decoratedCornellBox() {
   Scene scene = makeCornellBox();
   Light point;
@@ -247,10 +271,7 @@ TEST(GltfExport, ProbeVolumeRoundTrip) {
   Scene scene = decoratedCornellBox();
   ProbeVolume turned;
   turned.name = "hall_probes";
-  turned.transform = glm::mat4(0.8f, 0.0f, -0.6f, 0.0f,  // 36.87 degrees about +Y
-                               0.0f, 1.0f, 0.0f, 0.0f,
-                               0.6f, 0.0f, 0.8f, 0.0f,
-                               1.5f, 2.0f, -3.0f, 1.0f);
+  turned.transform = kTurnedNode;
   turned.size = glm::vec3(4.0f, 2.5f, 1.25f);
   turned.spacing = 0.5f;
   ProbeVolume plain;
@@ -269,8 +290,7 @@ TEST(GltfExport, ProbeVolumeRoundTrip) {
     EXPECT_GE(y.node, 0);
     EXPECT_EQ(x.size, y.size) << x.name;
     EXPECT_EQ(x.spacing, y.spacing) << x.name;
-    for (int c = 0; c < 4; ++c)
-      for (int r = 0; r < 4; ++r) EXPECT_NEAR(x.transform[c][r], y.transform[c][r], 1e-6f) << x.name;
+    expectSameTransform(x.transform, y.transform, x.name);
   }
   EXPECT_EQ(back->instances.size(), scene.instances.size());  // no mesh on the volumes' nodes
 }
@@ -280,11 +300,7 @@ TEST(GltfExport, ProbeVolumeRoundTrip) {
 TEST(GltfImport, BadProbeVolumeIsAnError) {
   const std::string dir = test::tempDir("import_probe_volume");
   auto write = [&](const std::string& name, const std::string& probeVolume) {
-    const std::string path = dir + "/" + name + ".gltf";
-    std::ofstream(path) << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
-      "nodes": [{"name": "attic_probes", "translation": [1, 2, 3],
-                 "extras": {"afterglow": {"probeVolume": )" << probeVolume << "}}}]}";
-    return path;
+    return writeNodeExtras(dir, name, "attic_probes", "probeVolume", probeVolume);
   };
   Result<Scene> good = loadGltf(write("good", R"({"size": [2, 1, 0.5], "spacing": 0.25})"));
   ASSERT_TRUE(good.isOk()) << good.message();
@@ -312,10 +328,7 @@ TEST(GltfExport, ReflectionProbeRoundTrip) {
   Scene scene = decoratedCornellBox();
   ReflectionProbe hall;
   hall.name = "hall_reflection";
-  hall.transform = glm::mat4(0.8f, 0.0f, -0.6f, 0.0f,  // 36.87 degrees about +Y
-                             0.0f, 1.0f, 0.0f, 0.0f,
-                             0.6f, 0.0f, 0.8f, 0.0f,
-                             1.5f, 2.0f, -3.0f, 1.0f);
+  hall.transform = kTurnedNode;
   hall.size = glm::vec3(8.0f, 4.0f, 2.5f);
   hall.blendDistance = 0.5f;
   hall.importance = 3;
@@ -339,8 +352,7 @@ TEST(GltfExport, ReflectionProbeRoundTrip) {
     EXPECT_EQ(x.importance, y.importance) << x.name;
     EXPECT_EQ(x.boxProjection, y.boxProjection) << x.name;
     EXPECT_EQ(x.resolution, y.resolution) << x.name;
-    for (int c = 0; c < 4; ++c)
-      for (int r = 0; r < 4; ++r) EXPECT_NEAR(x.transform[c][r], y.transform[c][r], 1e-6f) << x.name;
+    expectSameTransform(x.transform, y.transform, x.name);
   }
   EXPECT_EQ(back->instances.size(), scene.instances.size());  // no mesh on the probes' nodes
 }
@@ -350,11 +362,7 @@ TEST(GltfExport, ReflectionProbeRoundTrip) {
 TEST(GltfImport, ReflectionProbeDefaultsAndBadMembers) {
   const std::string dir = test::tempDir("import_reflection_probe");
   auto write = [&](const std::string& name, const std::string& probe) {
-    const std::string path = dir + "/" + name + ".gltf";
-    std::ofstream(path) << R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
-      "nodes": [{"name": "nave_reflection", "translation": [1, 2, 3],
-                 "extras": {"afterglow": {"reflectionProbe": )" << probe << "}}}]}";
-    return path;
+    return writeNodeExtras(dir, name, "nave_reflection", "reflectionProbe", probe);
   };
   Result<Scene> plain = loadGltf(write("plain", "{}"));
   ASSERT_TRUE(plain.isOk()) << plain.message();

@@ -112,4 +112,17 @@ bool Args::getFloat(const std::string& name, float fallback, float minExclusive,
   return true;
 }
 
+bool Args::single(const std::string& what, std::string* out) {
+  if (positional_.empty()) {
+    error_ = "missing " + what;
+    return false;
+  }
+  if (positional_.size() > 1) {
+    error_ = "one " + what + " only, got '" + positional_[1] + "' too";
+    return false;
+  }
+  *out = positional_[0];
+  return true;
+}
+
 }  // namespace afterglow::cli

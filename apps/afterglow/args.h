@@ -39,6 +39,9 @@ class Args {
   // Every value a repeatable option was given, in command-line order.
   std::vector<std::string> getAll(const std::string& name) const;
   const std::vector<std::string>& positional() const { return positional_; }
+  // The one positional argument (`what` names it in the error: "missing SCENE", "one SCENE
+  // only, got 'b' too"); false with error() set when there is none or more than one.
+  bool single(const std::string& what, std::string* out);
 
   // Typed getters: false (with error() set) when the value does not parse or is out of range.
   bool getInt(const std::string& name, int fallback, int minValue, int maxValue, int* out);

@@ -298,10 +298,8 @@ int runBake(int argc, char** argv, int first) {
       return usage(withSettings.error() + " (in " + args.get("settings") + " or the command line)");
     args = withSettings;
   }
-  if (args.positional().empty()) return usage("missing SCENE");
-  if (args.positional().size() > 1)
-    return usage("one SCENE only, got '" + args.positional()[1] + "' too");
-  const std::string input = args.positional()[0];
+  std::string input;
+  if (!args.single("SCENE", &input)) return usage(args.error());
   if (!args.has("output")) return usage("missing -o OUT/");
   const std::string outDir = args.get("output");
 

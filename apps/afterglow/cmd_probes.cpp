@@ -113,10 +113,8 @@ int runPlace(int argc, char** argv, int first) {
     std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
     return kExitOk;
   }
-  if (args.positional().empty()) return usage("missing SCENE");
-  if (args.positional().size() > 1)
-    return usage("one SCENE only, got '" + args.positional()[1] + "' too");
-  const std::string input = args.positional()[0];
+  std::string input;
+  if (!args.single("SCENE", &input)) return usage(args.error());
   if (!args.has("output")) return usage("missing -o PROBES.json");
   const std::string output = args.get("output");
   if (!endsWith(output, ".json"))

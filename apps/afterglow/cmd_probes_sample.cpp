@@ -44,10 +44,8 @@ int runProbesSample(int argc, char** argv, int first) {
     std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
     return kExitOk;
   }
-  if (args.positional().empty()) return usage("missing the bake folder OUT/");
-  if (args.positional().size() > 1)
-    return usage("one bake folder only, got '" + args.positional()[1] + "' too");
-  const std::string outDir = args.positional()[0];
+  std::string outDir;
+  if (!args.single("bake folder OUT/", &outDir)) return usage(args.error());
   std::vector<glm::vec3> points;
   for (const std::string& a : args.getAll("at")) {
     glm::vec3 p;

@@ -174,10 +174,8 @@ int runUv(int argc, char** argv, int first) {
     printError("uv: " + message + " (see afterglow uv --help)");
     return int(kExitUsage);
   };
-  if (args.positional().empty()) return usage("missing SCENE");
-  if (args.positional().size() > 1)
-    return usage("one SCENE only, got '" + args.positional()[1] + "' too");
-  const std::string input = args.positional()[0];
+  std::string input;
+  if (!args.single("SCENE", &input)) return usage(args.error());
   if (!args.has("output")) return usage("missing -o OUT.gltf");
   const std::string output = args.get("output");
   if (!endsWith(output, ".gltf") && !endsWith(output, ".glb"))

@@ -243,10 +243,12 @@ void findExtensionCarriers(const nlohmann::json& value, const std::string& where
   }
 }
 
-// The nodes whose extras.afterglow.reflectionProbe is an empty object: `{}` asks for every
-// default, but tinygltf drops empty objects from extras, so they are found in the raw JSON.
-std::set<size_t> defaultReflectionProbes(const nlohmann::json& root) {
-  std::set<size_t> out;
+// Per node, the members of its extras.afterglow that are empty objects: tinygltf drops empty
+// objects from extras, but `"reflectionProbe": {}` asks for every default and `"probeVolume":
+// {}` must be refused for its missing size, so they are found in the raw JSON.
+using EmptyExtras = std::map<size_t, std::set<std::string>>;
+EmptyExtras emptyAfterglowMembers(const nlohmann::json& root) {
+  EmptyExtras out;
   if (!root.is_object()) return out;
   auto nodes = root.find("nodes");
   if (nodes == root.end() || !nodes->is_array()) return out;
@@ -257,8 +259,8 @@ std::set<size_t> defaultReflectionProbes(const nlohmann::json& root) {
     if (extras == node.end() || !extras->is_object()) continue;
     auto ag = extras->find("afterglow");
     if (ag == extras->end() || !ag->is_object()) continue;
-    auto rp = ag->find("reflectionProbe");
-    if (rp != ag->end() && rp->is_object() && rp->empty()) out.insert(i);
+    for (auto it = ag->begin(); it != ag->end(); ++it)
+      if (it->is_object() && it->empty()) out[i].insert(it.key());
   }
   return out;
 }
@@ -340,13 +342,13 @@ class Importer {
  public:
   Importer(const tinygltf::Model& model, const std::string& file, const std::string& baseDir,
            const LoadOptions& options, const ExtensionCarriers& carriers,
-           const std::set<size_t>& defaultReflectionProbes, Scene& scene)
+           const EmptyExtras& emptyExtras, Scene& scene)
       : model_(model),
         file_(file),
         baseDir_(baseDir),
         options_(options),
         carriers_(carriers),
-        defaultReflectionProbes_(defaultReflectionProbes),
+        emptyExtras_(emptyExtras),
         scene_(scene) {}
 
   Status run() {
@@ -1168,13 +1170,23 @@ class Importer {
     return settings;
   }
 
+  // Node `index`'s extras.afterglow.<key>, or an empty object where the file had `{}` (which
+  // tinygltf dropped), or null.
+  const tinygltf::Value* afterglowMember(const tinygltf::Node& node, size_t index,
+                                         const char* key) const {
+    const tinygltf::Value* ag = member(node.extras, "afterglow");
+    if (const tinygltf::Value* v = ag ? member(*ag, key) : nullptr) return v;
+    static const tinygltf::Value kEmpty{tinygltf::Value::Object()};
+    auto found = emptyExtras_.find(index);
+    return found != emptyExtras_.end() && found->second.count(key) ? &kEmpty : nullptr;
+  }
+
   // extras.afterglow.probeVolume = {"size": [x, y, z], "spacing": s}: a box of light probes
   // centred on the node (not inherited). A box of no volume or a malformed one is an error: a
   // probe placement that silently ignored it would fill the whole level instead.
   Status readProbeVolume(const tinygltf::Node& node, size_t index, const std::string& where,
                          const glm::dmat4& world) {
-    const tinygltf::Value* ag = member(node.extras, "afterglow");
-    const tinygltf::Value* pv = ag ? member(*ag, "probeVolume") : nullptr;
+    const tinygltf::Value* pv = afterglowMember(node, index, "probeVolume");
     if (!pv) return Status::ok();
     if (!pv->IsObject()) return fail(where + ": extras.afterglow.probeVolume is not an object");
     ProbeVolume volume;
@@ -1210,13 +1222,9 @@ class Importer {
   // region or blur the wrong way, and the level designer would not know why.
   Status readReflectionProbe(const tinygltf::Node& node, size_t index, const std::string& where,
                              const glm::dmat4& world) {
-    const tinygltf::Value* ag = member(node.extras, "afterglow");
-    const tinygltf::Value* rp = ag ? member(*ag, "reflectionProbe") : nullptr;
-    const bool allDefaults = !rp && defaultReflectionProbes_.count(index);
-    if (!rp && !allDefaults) return Status::ok();
+    const tinygltf::Value* rp = afterglowMember(node, index, "reflectionProbe");
+    if (!rp) return Status::ok();
     const std::string key = where + ": extras.afterglow.reflectionProbe";
-    static const tinygltf::Value kEmpty{tinygltf::Value::Object()};
-    if (allDefaults) rp = &kEmpty;
     if (!rp->IsObject()) return fail(key + " is not an object");
     ReflectionProbe probe;
     probe.name = node.name.empty() ? format("node%zu", index) : node.name;
@@ -1471,7 +1479,7 @@ class Importer {
   std::string baseDir_;
   LoadOptions options_;
   const ExtensionCarriers& carriers_;  // unsupported required extensions' carriers
-  const std::set<size_t>& defaultReflectionProbes_;  // nodes with reflectionProbe: {}
+  const EmptyExtras& emptyExtras_;  // per node, its extras.afterglow members that are {}
   Scene& scene_;
   std::vector<int> usedMeshes_;
   std::map<TextureKey, int> textureSlots_;
@@ -1495,7 +1503,7 @@ Result<Scene> loadGltfFromMemory(const std::string& bytes, const std::string& na
                                        file.c_str(), kMaxJsonDepth));
 
   ExtensionCarriers carriers;
-  std::set<size_t> reflectionDefaults;
+  EmptyExtras emptyExtras;
   {
     // Parsed here for the checks tinygltf does not make, and freed before tinygltf parses it.
     const nlohmann::json root = nlohmann::json::parse(
@@ -1503,7 +1511,7 @@ Result<Scene> loadGltfFromMemory(const std::string& bytes, const std::string& na
     Status images = checkImageBufferViews(root, file);
     if (!images) return images;
     carriers = unsupportedRequiredExtensions(root);
-    reflectionDefaults = defaultReflectionProbes(root);
+    emptyExtras = emptyAfterglowMembers(root);
   }
 
   tinygltf::TinyGLTF loader;
@@ -1535,7 +1543,7 @@ Result<Scene> loadGltfFromMemory(const std::string& bytes, const std::string& na
 
   Scene scene;
   scene.sourcePath = nameForMessages;
-  Importer importer(model, file, baseDir, options, carriers, reflectionDefaults, scene);
+  Importer importer(model, file, baseDir, options, carriers, emptyExtras, scene);
   Status s;
   try {
     s = importer.run();
