@@ -296,7 +296,8 @@ TEST(GltfExport, ProbeVolumeRoundTrip) {
 }
 
 // A probe volume of no size is an import error naming the file and node (a placement that
-// ignored it would fill the whole level); so are a malformed size and spacing.
+// ignored it would fill the whole level); so are a malformed size and spacing, and `{}`
+// (which tinygltf alone would drop unseen).
 TEST(GltfImport, BadProbeVolumeIsAnError) {
   const std::string dir = test::tempDir("import_probe_volume");
   auto write = [&](const std::string& name, const std::string& probeVolume) {
@@ -312,7 +313,7 @@ TEST(GltfImport, BadProbeVolumeIsAnError) {
   for (const char* bad : {R"({"size": [0, 1, 1]})", R"({"size": [1, -1, 1]})",
                           R"({"size": [1, 1]})", R"({"size": "big"})",
                           R"({"size": [1, 1, 1], "spacing": 0})",
-                          R"({"size": [1, 1, 1], "spacing": "fine"})", R"(7)"}) {
+                          R"({"size": [1, 1, 1], "spacing": "fine"})", R"(7)", R"({})"}) {
     const std::string path = write("bad", bad);
     Result<Scene> r = loadGltf(path);
     ASSERT_FALSE(r.isOk()) << bad;
