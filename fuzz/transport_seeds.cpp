@@ -81,6 +81,34 @@ TransportData small(bool withSky, bool withFilter) {
   return d;
 }
 
+// small() with one reflection probe of 1×1 texel faces: a miss, a lightmapped hit and so on.
+TransportData withReflections() {
+  TransportData d = small(true, true);
+  ReflectionTransport& r = d.reflections;
+  for (const MaterialParams& m : d.materials) r.bakedAlbedo.push_back(m.albedo);
+  ReflectionProbeCapture c;
+  c.name = "hall";
+  c.resolution = 1;
+  c.box.halfSize = glm::vec3(2.0f, 1.0f, 3.0f);
+  r.probes.push_back(c);
+  for (int face = 0; face < kCubeFaceCount; ++face) {
+    ReflectionHit h;
+    if (face > 0) {
+      h.material = uint32_t(face % 2);
+      h.atlas = face == 5 ? kReflectionNoAtlas : uint16_t(face % 2);
+      h.lightmapUv = glm::vec2(0.25f, 0.75f);
+      h.roughness = floatToHalf(0.5f);
+      for (int k = 0; k < 3; ++k) {
+        h.diffuse[k] = h.emission[k] = h.f0[k] = floatToHalf(0.5f);
+        h.normal[k] = floatToHalf(k == 1 ? 1.0f : 0.0f);
+      }
+      h.distance = 1.5f;
+    }
+    r.hits.push_back(h);
+  }
+  return d;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -94,6 +122,7 @@ int main(int argc, char** argv) {
       {"small.agt", small(true, true)},
       {"no-sky.agt", small(false, true)},
       {"no-filter.agt", small(true, false)},
+      {"reflections.agt", withReflections()},
   };
   for (const auto& [name, data] : seeds) {
     std::string error;

@@ -7,6 +7,7 @@
 
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/baker/reference.h"
 #include "lightmap_post.h"
 #include "sky_image.h"
@@ -254,6 +255,27 @@ Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
     result.warnings.push_back(format(
         "%zu invalid texels had no valid texel in their chart to take light from and stay black",
         unreached));
+
+  if (!options.reference && !scene.reflectionProbes.empty()) {
+    // Captured from the finished lightmaps, through the runtime's own passes, so a relight
+    // from scratch gives these cubemaps bit for bit.
+    t0 = Clock::now();
+    Status st = captureReflectionProbes(scene, tracer, options.reflections, result.transport,
+                                        progress);
+    if (cancelled()) return Status::error("cancelled");
+    if (!st) return st;
+    if (const std::string why = result.transport.validate(); !why.empty())
+      return Status::error("internal error: inconsistent transport: " + why);
+    record("reflection capture", t0);
+    t0 = Clock::now();
+    progress.begin("reflection passes", 1);
+    result.dfg = runtime::dfgTable(runtime::kDfgSize);
+    result.reflectionChains = runtime::solveReflectionProbes(result.transport, result.lightmaps,
+                                                             result.dfg, runtime::kDfgSize);
+    progress.advance();
+    progress.end();
+    record("reflection passes", t0);
+  }
   return result;
 }
 

@@ -94,6 +94,22 @@ glm::vec3 diffuseAlbedo(const scenes::Scene& scene, int material, glm::vec2 uv0)
   return bounceAlbedo(in);
 }
 
+SurfaceBrdf surfaceBrdf(const scenes::Scene& scene, int material, glm::vec2 uv0) {
+  const scenes::Material& m = scene.material(material);
+  const glm::vec3 mr = textureRgb(scene, m.metallicRoughnessTexture, uv0);
+  const glm::vec3 base = glm::vec3(m.baseColorFactor) * textureRgb(scene, m.baseColorTexture, uv0);
+  const float metallic = glm::clamp(m.metallicFactor * mr.b, 0.0f, 1.0f);
+  const glm::vec3 dielectric =
+      dielectricF0(m.ior, m.specularFactor * textureAlpha(scene, m.specularTexture, uv0),
+                   m.specularColorFactor * textureRgb(scene, m.specularColorTexture, uv0));
+  const float reflectivity = std::max(dielectric.x, std::max(dielectric.y, dielectric.z));
+  SurfaceBrdf brdf;
+  brdf.diffuse = base * (1.0f - metallic) * (1.0f - reflectivity);
+  brdf.f0 = glm::mix(dielectric, base, metallic);
+  brdf.roughness = glm::clamp(m.roughnessFactor * mr.g, 0.0f, 1.0f);
+  return brdf;
+}
+
 glm::vec3 diffuseAlbedoFactor(const scenes::Material& m) {
   AlbedoInputs in;
   in.baseColor = glm::vec3(m.baseColorFactor);

@@ -132,9 +132,12 @@ glm::vec3 boxProject(const ReflectionProbeBox& box, glm::vec3 position, glm::vec
   if (!box.boxProjection || !usable(box) || !finite(box.capturePosition) || !finite(position) ||
       !finite(direction))
     return direction;
-  const dvec3 h(box.halfSize);
-  const dvec3 q = toLocal(box, dvec3(position));
-  if (std::abs(q.x) > h.x || std::abs(q.y) > h.y || std::abs(q.z) > h.z) return direction;
+  const bool ownProjection = box.projectionHalfSize.x > 0.0f && box.projectionHalfSize.y > 0.0f &&
+                             box.projectionHalfSize.z > 0.0f && finite(box.projectionHalfSize) &&
+                             finite(box.projectionCentre);
+  const dvec3 h(ownProjection ? box.projectionHalfSize : box.halfSize);
+  const dvec3 centre(ownProjection ? box.projectionCentre : box.centre);
+  const dvec3 q = glm::clamp(glm::transpose(glm::dmat3(box.axes)) * (dvec3(position) - centre), -h, h);
   const dvec3 v = glm::transpose(glm::dmat3(box.axes)) * dvec3(direction);
   // The exit distance along the ray: for each axis the ray moves along, the slab face ahead of
   // it; the nearest of those is where the ray leaves the box (q is inside, so each t ≥ 0).
@@ -144,7 +147,7 @@ glm::vec3 boxProject(const ReflectionProbeBox& box, glm::vec3 position, glm::vec
     if (v[i] < 0.0) t = std::min(t, (-h[i] - q[i]) / v[i]);
   }
   if (!std::isfinite(t)) return direction;  // a zero direction
-  const dvec3 hit = dvec3(box.centre) + glm::dmat3(box.axes) * (q + t * v);
+  const dvec3 hit = centre + glm::dmat3(box.axes) * (q + t * v);
   const dvec3 toHit = hit - dvec3(box.capturePosition);
   const double length = glm::length(toHit);
   if (!(length > 0.0) || !finite(toHit)) return direction;

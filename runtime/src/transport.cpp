@@ -241,7 +241,7 @@ size_t TransportData::memoryBytes() const {
              bytesOf(clusterAlbedoTexture) + bytesOf(clusterEmissionTexture);
   for (const Source& s : sources)
     b += bytesOf(s.texelTransfer) + bytesOf(s.clusterTransfer) + bytesOf(s.probeTransfer);
-  b += probeBytes();
+  b += probeBytes() + reflectionBytes();
   for (const AtlasLayout& a : atlases)
     b += bytesOf(a.texelOfPixel) + bytesOf(a.mixPixel) + bytesOf(a.mixStart) +
          bytesOf(a.mixTexel) + bytesOf(a.mixWeight);
@@ -255,6 +255,11 @@ size_t TransportData::probeBytes() const {
              bytesOf(p.links.rowScale) + bytesOf(p.sky);
   for (const Source& s : sources) b += bytesOf(s.probeTransfer);
   return b;
+}
+
+size_t TransportData::reflectionBytes() const {
+  return bytesOf(reflections.hits) + bytesOf(reflections.bakedAlbedo) +
+         reflections.probes.size() * sizeof(ReflectionProbeCapture);
 }
 
 std::string TransportData::validate() const {
@@ -379,7 +384,7 @@ std::string TransportData::validate() const {
         return why.str();
       }
   }
-  return {};
+  return reflections.validate(materials.size(), atlases.size());
 }
 
 }  // namespace afterglow::runtime

@@ -66,10 +66,11 @@ constexpr const char* kGatherMaps = "GMAP";
 constexpr const char* kTexelSky = "TSKY";
 constexpr const char* kClusterSky = "CSKY";
 constexpr const char* kProbes = "PROB";
+constexpr const char* kReflections = "REFL";
 constexpr const char* kRequired[] = {kInfo,      kAtlases,      kMaterials,   kSources,
                                      kClusters,  kFarClusters,  kSharedFar,   kLinks,
                                      kClusterGather, kGatherMaps, kTexelSky,  kClusterSky,
-                                     kProbes};
+                                     kProbes,    kReflections};
 constexpr size_t kSectionCount = sizeof(kRequired) / sizeof(kRequired[0]);
 
 constexpr size_t kEntrySize = 32;    // one section table entry
@@ -232,6 +233,28 @@ const SectionWriter kWriters[] = {
        o.links(p.links);
        o.array(p.sky);
      }},
+    {kReflections, 0,
+     [](const TransportData& d, Out& o) {
+       const ReflectionTransport& r = d.reflections;
+       o.scalar(r.bounces);
+       o.array(r.bakedAlbedo);
+       for (const ReflectionProbeCapture& p : r.probes) {
+         const ReflectionProbeBox& b = p.box;
+         o.string(p.name);
+         o.scalar(p.resolution);
+         o.scalar(p.firstHit);
+         o.vec3(b.centre);
+         for (int a = 0; a < 3; ++a) o.vec3(b.axes[a]);
+         o.vec3(b.halfSize);
+         o.scalar(b.blendDistance);
+         o.scalar(int32_t(b.importance));
+         o.scalar(uint32_t(b.boxProjection ? 1 : 0));
+         o.vec3(b.capturePosition);
+         o.vec3(b.projectionCentre);
+         o.vec3(b.projectionHalfSize);
+       }
+       o.array(r.hits);
+     }},
 };
 static_assert(sizeof(kWriters) / sizeof(kWriters[0]) == kSectionCount, "");
 
@@ -249,6 +272,7 @@ uint64_t sectionCount(const TransportData& d, const char* id) {
   if (id == kGatherMaps) return d.texelPoint.size();
   if (id == kTexelSky) return d.texelSky.size();
   if (id == kProbes) return d.probes.count();
+  if (id == kReflections) return d.reflections.count();
   return d.clusterSky.size();  // kClusterSky
 }
 
@@ -433,6 +457,38 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
                      std::to_string(p.count()));
     return true;
   }
+  if (id == kReflections) {
+    ReflectionTransport& r = d.reflections;
+    if (!in.scalar(r.bounces, "reflection bounces") ||
+        !in.array(r.bakedAlbedo, "baked albedos"))
+      return false;
+    // A name's length, two counts and 26 scalars at least.
+    if (!in.records(count, 4 + 4 + 8 + 26 * 4, "reflection probes")) return false;
+    r.probes.resize(size_t(count));
+    for (uint64_t i = 0; i < count; ++i) {
+      ReflectionProbeCapture& p = r.probes[size_t(i)];
+      ReflectionProbeBox& b = p.box;
+      int32_t importance = 0;
+      uint32_t projection = 0;
+      bool ok = in.string(p.name, "name") && in.scalar(p.resolution, "resolution") &&
+                in.scalar(p.firstHit, "first hit") && in.vec3(b.centre, "centre");
+      for (int a = 0; ok && a < 3; ++a) ok = in.vec3(b.axes[a], "axes");
+      ok = ok && in.vec3(b.halfSize, "half size") &&
+           in.scalar(b.blendDistance, "blend distance") && in.scalar(importance, "importance") &&
+           in.scalar(projection, "box projection") &&
+           (projection <= 1 || in.fail("box projection is " + std::to_string(projection))) &&
+           in.vec3(b.capturePosition, "capture position") &&
+           in.vec3(b.projectionCentre, "projection centre") &&
+           in.vec3(b.projectionHalfSize, "projection half size");
+      if (!ok) {
+        in.why = "reflection probe " + std::to_string(i) + ": " + in.why;
+        return false;
+      }
+      b.importance = importance;
+      b.boxProjection = projection != 0;
+    }
+    return in.array(r.hits, "reflection hits");
+  }
   const std::vector<uint32_t>* rowStart = nullptr;
   if (id == kLinks || id == kSharedFar) {
     SparseLinks& m = id == kLinks ? d.links : d.sharedFar;
@@ -482,7 +538,8 @@ const char* sectionOfComplaint(const std::string& why) {
   static const struct {
     const char* prefix;
     const char* id;
-  } kPrefixes[] = {{"probe", kProbes},
+  } kPrefixes[] = {{"reflection", kReflections},
+                   {"probe", kProbes},
                    {"links", kLinks},
                    {"shared far fields", kSharedFar},
                    {"far clusters", kFarClusters},

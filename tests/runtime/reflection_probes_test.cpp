@@ -199,18 +199,30 @@ TEST(ReflectionProbes, BoxProjectionLooksAtTheWallPointTheRayHits) {
   }
 }
 
-TEST(ReflectionProbes, BoxProjectionLeavesTheDirectionAloneWhenOffOrOutside) {
+TEST(ReflectionProbes, BoxProjectionLeavesTheDirectionAloneWhenOffAndClampsOutside) {
   ReflectionProbeBox box = reflectionProbeBoxFromNode(glm::mat4(1.0f), glm::vec3(4));
   box.capturePosition = glm::vec3(0.5f, 0, 0);
   const glm::vec3 d = glm::normalize(glm::vec3(1, 2, -0.5f));
   const glm::vec3 inside(0.2f, -1.0f, 1.0f);
   EXPECT_GT(glm::distance(boxProject(box, inside, d), d), 1e-3f);
-  const glm::vec3 outside(2.5f, 0, 0);
-  EXPECT_EQ(boxProject(box, outside, d), d);
+  // A point outside looks up as from the nearest point of the box (continuous across a wall).
+  EXPECT_EQ(boxProject(box, glm::vec3(2.5f, 0, 0), d), boxProject(box, glm::vec3(2, 0, 0), d));
+  EXPECT_LT(glm::distance(boxProject(box, glm::vec3(2.0001f, 0.3f, 0), d),
+                          boxProject(box, glm::vec3(1.9999f, 0.3f, 0), d)),
+            1e-3f);
   box.boxProjection = false;
   EXPECT_EQ(boxProject(box, inside, d), d);
   box.boxProjection = true;
   EXPECT_EQ(boxProject(box, inside, glm::vec3(0)), glm::vec3(0));
+  // A projection box of its own (a fitted room's walls inside a wider influence box) is the
+  // one the ray leaves: from (0.5, 0, 0) along (1, 1, 0) it reaches the wall x = 1 at
+  // (1, 0.5, 0), level with the capture position, not the influence box's x = 2.
+  ReflectionProbeBox fitted = box;
+  fitted.capturePosition = glm::vec3(0.0f, 0.5f, 0.0f);
+  fitted.projectionCentre = glm::vec3(0.0f);
+  fitted.projectionHalfSize = glm::vec3(1.0f);
+  const glm::vec3 up = boxProject(fitted, glm::vec3(0.5f, 0, 0), glm::normalize(glm::vec3(1, 1, 0)));
+  EXPECT_LT(glm::distance(up, glm::vec3(1.0f, 0.0f, 0.0f)), 1e-6f);
   // Looking from the capture position itself changes nothing.
   const glm::vec3 same = boxProject(box, box.capturePosition, d);
   EXPECT_NEAR(glm::distance(same, d), 0.0f, 1e-6f);

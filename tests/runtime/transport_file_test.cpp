@@ -28,6 +28,7 @@ struct Shape {
   int atlasSides[3][2] = {{16, 12}, {10, 10}, {7, 5}};
   int lightsWithTexelTransfer = 2;
   bool probes = true;  // four light probes in one tetrahedron, three regions each
+  bool reflections = true;  // two reflection probes of 2² and 4² texels a face
 };
 
 // Every field populated, and valid (validate() is empty).
@@ -170,6 +171,45 @@ TransportData makeTransport(const Shape& s, uint64_t seed = 1) {
     for (uint32_t k = 0; k < 4 * kProbeSkyCount; ++k) p.sky.push_back(floatToHalf(rng.unit() - 0.5f));
   }
 
+  if (s.reflections) {
+    ReflectionTransport& r = d.reflections;
+    r.bounces = 2;
+    for (const MaterialParams& m : d.materials) r.bakedAlbedo.push_back(m.albedo);
+    for (uint32_t side : {2u, 4u}) {
+      ReflectionProbeCapture c;
+      c.name = "probe" + std::to_string(side);
+      c.resolution = side;
+      c.firstHit = r.hits.size();
+      c.box.centre = glm::vec3(rng.unit(), rng.unit(), rng.unit());
+      c.box.axes = glm::mat3(glm::vec3(0, 0, 1), glm::vec3(0, 1, 0), glm::vec3(-1, 0, 0));
+      c.box.halfSize = glm::vec3(1.0f + rng.unit(), 2.0f, 3.0f);
+      c.box.blendDistance = 0.5f;
+      c.box.importance = int(side);
+      c.box.boxProjection = side == 2;
+      c.box.capturePosition = c.box.centre + glm::vec3(0.1f);
+      c.box.projectionCentre = c.box.centre - glm::vec3(0.2f);
+      c.box.projectionHalfSize = c.box.halfSize * 0.5f;
+      r.probes.push_back(c);
+      for (uint32_t k = 0; k < kCubeFaceCount * side * side; ++k) {
+        ReflectionHit h;
+        if (rng.below(4) != 0) {
+          h.material = rng.below(uint32_t(d.materials.size()));
+          h.atlas = uint16_t(rng.below(uint32_t(d.atlases.size())));
+          h.roughness = floatToHalf(rng.unit());
+          h.lightmapUv = glm::vec2(rng.unit(), rng.unit());
+          for (int c3 = 0; c3 < 3; ++c3) {
+            h.diffuse[c3] = floatToHalf(rng.unit());
+            h.emission[c3] = floatToHalf(rng.unit());
+            h.f0[c3] = floatToHalf(rng.unit());
+            h.normal[c3] = floatToHalf(rng.unit() - 0.5f);
+          }
+          h.distance = 1.0f + rng.unit();
+        }
+        r.hits.push_back(h);
+      }
+    }
+  }
+
   d.indirectIntensity = 1.5f;
   d.albedoBoost = 1.25f;
   for (int i = 0; i < kShCount; ++i) d.skySh[i] = glm::vec3(0.1f * float(i), -0.2f, 0.3f + float(i));
@@ -253,12 +293,34 @@ void expectEqual(const TransportData& a, const TransportData& b) {
   EXPECT_EQ(p.links.link, q.links.link);
   EXPECT_EQ(p.links.rowScale, q.links.rowScale);
   EXPECT_EQ(p.sky, q.sky);
+  const ReflectionTransport &r = a.reflections, &t = b.reflections;
+  EXPECT_EQ(r.bounces, t.bounces);
+  EXPECT_EQ(r.bakedAlbedo, t.bakedAlbedo);
+  ASSERT_EQ(r.probes.size(), t.probes.size());
+  for (size_t i = 0; i < r.probes.size(); ++i) {
+    SCOPED_TRACE("reflection probe " + std::to_string(i));
+    const ReflectionProbeCapture &x = r.probes[i], &y = t.probes[i];
+    EXPECT_EQ(x.name, y.name);
+    EXPECT_EQ(x.resolution, y.resolution);
+    EXPECT_EQ(x.firstHit, y.firstHit);
+    EXPECT_EQ(x.box.centre, y.box.centre);
+    EXPECT_EQ(x.box.axes, y.box.axes);
+    EXPECT_EQ(x.box.halfSize, y.box.halfSize);
+    EXPECT_EQ(x.box.blendDistance, y.box.blendDistance);
+    EXPECT_EQ(x.box.importance, y.box.importance);
+    EXPECT_EQ(x.box.boxProjection, y.box.boxProjection);
+    EXPECT_EQ(x.box.capturePosition, y.box.capturePosition);
+    EXPECT_EQ(x.box.projectionCentre, y.box.projectionCentre);
+    EXPECT_EQ(x.box.projectionHalfSize, y.box.projectionHalfSize);
+  }
+  ASSERT_EQ(r.hits.size(), t.hits.size());
+  EXPECT_EQ(0, std::memcmp(r.hits.data(), t.hits.data(), r.hits.size() * sizeof(ReflectionHit)));
 }
 
 bool isEmpty(const TransportData& d) {
   return d.texelCount == 0 && d.clusterCount == 0 && d.atlases.empty() && d.sources.empty() &&
          d.materials.empty() && d.links.link.empty() && d.texelSky.empty() &&
-         d.probes.count() == 0;
+         d.probes.count() == 0 && d.reflections.count() == 0;
 }
 
 // ---- File surgery ----------------------------------------------------------------------------
@@ -373,7 +435,9 @@ TEST(TransportFile, TransportDataHasNoFieldTheFileMisses) {
   // The sizes with libstdc++ on 64-bit when this file format was written. A failure means a
   // field was added: serialise it (transport_file.cpp) and compare it in expectEqual() above.
 #if defined(__GLIBCXX__) && UINTPTR_MAX == 0xffffffffffffffffull
-  EXPECT_EQ(sizeof(TransportData), 1040u);
+  EXPECT_EQ(sizeof(TransportData), 1120u);
+  EXPECT_EQ(sizeof(ReflectionTransport), 80u);
+  EXPECT_EQ(sizeof(ReflectionProbeCapture), 152u);
   EXPECT_EQ(sizeof(AtlasLayout), 128u);
   EXPECT_EQ(sizeof(Source), 136u);
   EXPECT_EQ(sizeof(ProbeTransport), 208u);
@@ -551,7 +615,7 @@ TEST(TransportFile, SectionTableRules) {
   const TransportData data = makeTransport(Shape());
   const std::vector<uint8_t> bytes = serializeTransport(data);
   const std::vector<Section> sections = split(bytes);
-  ASSERT_EQ(sections.size(), 13u);
+  ASSERT_EQ(sections.size(), 14u);
   // join() rebuilds the writer's layout exactly.
   EXPECT_EQ(join(sections), bytes);
 

@@ -9,6 +9,7 @@
 
 #include "afterglow/baker/clusters.h"
 #include "afterglow/baker/reference.h"
+#include "afterglow/baker/reflection_capture.h"
 #include "afterglow/baker/texels.h"
 #include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/progress.h"
@@ -36,6 +37,9 @@ struct BakeOptions {
   // empty.
   runtime::ProbeTetrahedra probes;
   ProbeOptions probeOptions;
+  // Reflection probes: the scene's (extras.afterglow.reflectionProbe), captured and solved with
+  // this many bounces.
+  ReflectionOptions reflections;
   // Validation: compute every texel with the reference path tracer instead of the precompute
   // and solve (no clusters, links or transport come out).
   bool reference = false;
@@ -66,6 +70,11 @@ struct BakeResult {
   std::vector<std::vector<glm::vec3>> lightmaps;  // per atlas, width*height linear E/π, dilated
   // Per light probe (BakeOptions::probes), its radiance SH from the same solve.
   std::vector<runtime::ShL2> probeSh;
+  // Per reflection probe, its prefiltered radiance (mips 0..6): [0] the sky, [i + 1]
+  // transport.reflections.probes[i]; empty without reflection probes. dfg is the split sum's
+  // table (runtime::dfgTable(kDfgSize)) they were shaded with.
+  std::vector<runtime::CubemapChain> reflectionChains;
+  std::vector<glm::vec2> dfg;
   std::vector<StageTime> stages;
   uint64_t raysTraced = 0;      // every ray of the bake
   uint64_t raysIntersected = 0; // of which closest-hit queries (gather rays, texel placement)

@@ -111,6 +111,19 @@ glm::vec3 diffuseAlbedoFactor(const scenes::Material& material);
 // base colour only tints a specular share its roughness removes), or albedo outside [a0, a1].
 bool baseColorForAlbedoFactor(const scenes::Material& material, glm::vec3 albedo,
                               glm::vec3* baseColor);
+// The metallic-roughness BRDF of a material at a UV, as an engine shades it (glTF's
+// metallic-roughness model with KHR_materials_ior and KHR_materials_specular), linear RGB:
+//   diffuse   = baseColor × (1 − metallic) × (1 − max(dielectricF0.rgb))
+//   f0        = mix(dielectricF0, baseColor, metallic)     (Schlick's specular colour)
+//   roughness = perceptual roughness, roughnessFactor × metallicRoughnessTexture.g
+// The reflection probes' capture shades with it; bounceAlbedo folds part of the specular into
+// the bounce albedo instead, which an engine's probes would count twice.
+struct SurfaceBrdf {
+  glm::vec3 diffuse{0.0f};
+  glm::vec3 f0{0.0f};
+  float roughness = 1.0f;
+};
+SurfaceBrdf surfaceBrdf(const scenes::Scene& scene, int material, glm::vec2 uv0);
 // Emitted radiance of a material at a UV, linear RGB.
 glm::vec3 emittedRadiance(const scenes::Scene& scene, int material, glm::vec2 uv0);
 

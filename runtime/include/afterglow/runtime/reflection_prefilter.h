@@ -41,6 +41,8 @@
 
 namespace afterglow::runtime {
 
+// The DFG table's size the bake and the runtime shade reflections with (64 × 64).
+constexpr int kDfgSize = 64;
 // Unity's probe mip count (mips 0..6).
 constexpr int kReflectionMipCount = 7;
 // Default GGX samples per output texel of prefilterGgx: with filtered importance sampling the

@@ -65,6 +65,13 @@ struct ReflectionProbeBox {
   int importance = 1;               // higher wins where boxes overlap
   bool boxProjection = true;        // false: look the cubemap up with the reflected direction as is
   glm::vec3 capturePosition{0.0f};  // where the cubemap was captured, world (usually centre)
+  // The box that box projection intersects (HDRP's "proxy volume"), on the same axes; a
+  // projectionHalfSize that is not > 0 on every axis means the influence box itself. They differ
+  // for a box fitted to a room: the projection box is the walls and the influence box reaches
+  // blendDistance beyond them, so that the walls themselves (and what stands on them) get the
+  // probe's full weight instead of the fade's 0 at the influence box's faces.
+  glm::vec3 projectionCentre{0.0f};
+  glm::vec3 projectionHalfSize{0.0f};
 };
 
 // The box of a probe on a node: `size` is the box's full edge lengths in the node's local units
@@ -95,10 +102,12 @@ std::vector<ProbeWeight> reflectionProbesAt(const std::vector<ReflectionProbeBox
 // `direction` (Lagarde and Zanuttini 2012, "Local image-based lighting with parallax-corrected
 // cubemaps"): the ray leaves the box at a wall point, and the cubemap saw that point from the
 // capture position, so the result is normalize(hit − capturePosition). The ray is intersected
-// with the box in the box's local frame (slabs), in double precision. Returns `direction`
-// unchanged (not normalised) when box.boxProjection is false, when the box is ignored, when
-// `position` is outside the box, when `direction` is zero or not finite, or when the hit is the
-// capture position itself.
+// with the projection box (the influence box unless one is given) in the box's local frame
+// (slabs), in double precision. A `position` outside the projection box (in an influence box's
+// margin beyond the walls, or a hit a rounding error outside them) is first clamped onto it,
+// which keeps the lookup continuous. Returns `direction` unchanged (not normalised) when
+// box.boxProjection is false, when the box is ignored, when `direction` is zero or not finite,
+// or when the hit is the capture position itself.
 glm::vec3 boxProject(const ReflectionProbeBox& box, glm::vec3 position, glm::vec3 direction);
 
 }  // namespace afterglow::runtime

@@ -19,6 +19,7 @@
 #include <glm/glm.hpp>
 
 #include "afterglow/runtime/probe_tetrahedra.h"
+#include "afterglow/runtime/reflection_capture.h"
 
 namespace afterglow::runtime {
 
@@ -277,6 +278,9 @@ struct TransportData {
   // Light probes (empty without): their transfer; the sources' part is in Source::probeTransfer.
   ProbeTransport probes;
 
+  // Reflection probes (empty without): every cubemap texel's capture hit (reflection_capture.h).
+  ReflectionTransport reflections;
+
   // Bake-level settings (Unity semantics; 1 is physically correct).
   float indirectIntensity = 1.0f;  // scales all bounced light reaching texels
   float albedoBoost = 1.0f;        // >= 1, pushes albedo toward white for bounces
@@ -298,6 +302,8 @@ struct TransportData {
   size_t memoryBytes() const;
   // Of which the light probes' (their mesh and transfer, the sources' probe transfer).
   size_t probeBytes() const;
+  // Of which the reflection probes' (their hits).
+  size_t reflectionBytes() const;
 };
 
 // texelGather and pointFilter (smoothing only with filterPasses > 0) from texelPoint,

@@ -1,7 +1,7 @@
 // The transport file (OUT/transport.agt): TransportData on disk, written by the bake and loaded
 // by engines. GLM and the standard library only, like the rest of the runtime.
 //
-// Format, version 5. Everything is little-endian; floats are IEEE binary32, halves binary16.
+// Format, version 6. Everything is little-endian; floats are IEEE binary32, halves binary16.
 //
 //   header (40 bytes, at 0)
 //     0  char[8]  magic "AGLOWTR\0"
@@ -25,7 +25,7 @@
 //              8 bytes of padding, then the elements packed: every array's data starts 16-byte
 //              aligned in the file, so it can be memcpy'd in one go (or used in place).
 //
-// Sections of version 5 (all required; any other id is skipped, so a later writer of the same
+// Sections of version 6 (all required; any other id is skipped, so a later writer of the same
 // version may add sections that older readers ignore). "count" is the table's element count,
 // which the reader checks against the payload.
 //   INFO  count 1: u32 texelCount, u32 clusterCount, u32 gatherPointCount, i32 filterPasses,
@@ -56,6 +56,14 @@
 //         then the links as LINK (u32 targetBits, arrays rowStart, link, rowScale; a row per
 //         probe and region, targets are clusters and far clusters), array u16 sky (probes ×
 //         45 half floats: the sky transfer's upper triangle). See runtime::ProbeTransport.
+//   REFL  count = reflection probes (0 when the bake had none): u32 bounces, array vec3
+//         bakedAlbedo (per material, or empty), then per probe: string name, u32 resolution,
+//         u64 firstHit, vec3 centre, 3 × vec3 axes (columns), vec3 halfSize, f32
+//         blendDistance, i32 importance, u32 boxProjection (0/1), vec3 capturePosition, vec3
+//         projectionCentre, vec3 projectionHalfSize; then
+//         array hits (44 bytes each, runtime::ReflectionHit's layout: u32 material, u16 atlas,
+//         u16 roughness (half), 2 × f32 lightmap UV, 3 × u16 diffuse, 3 × u16 emission,
+//         3 × u16 F0, 3 × u16 normal (halves), f32 distance). See reflection_capture.h.
 // (rows = the rowStart array's length minus one.)
 //
 // The reader checks, in this order: magic, version, header and file sizes, checksum, the section
@@ -78,7 +86,7 @@ namespace afterglow::runtime {
 
 // 2: 4-byte links, far clusters, gather map source; 3: shared far fields; 4: link rows padded
 // to fours
-constexpr uint32_t kTransportVersion = 5;
+constexpr uint32_t kTransportVersion = 6;
 constexpr char kTransportMagic[8] = {'A', 'G', 'L', 'O', 'W', 'T', 'R', '\0'};
 constexpr uint32_t kTransportHeaderSize = 40;
 

@@ -1,0 +1,133 @@
+// Reflection probes' capture and relighting (issue 15), GLM only.
+//
+// The bake casts one ray from each probe's capture position through the centre of every texel of
+// its cubemap and keeps what the ray hit (a ReflectionHit): enough to shade that point again from
+// the current lightmaps, materials, sky and probes, the way an engine shades it. The runtime
+// (and the bake, through the same functions, so a relight equals a rebake) turns the hits into
+// radiance cubemaps, one capture pass at a time:
+//
+//   texel radiance = diffuse × lightmap(uv1) + emission + specular           (a surface)
+//                  = sky SH radiance in the texel's direction                 (a miss)
+//   specular       = Σ_probes w · prefiltered(boxProject(R), roughness) · (F0 · scale + bias)
+//
+// - diffuse: the metallic-roughness BRDF's diffuse colour, baseColor · (1 − metallic) ·
+//   (1 − max(dielectric F0)), textures applied at the hit; scaled by the material's current
+//   albedo over its baked albedo (setAlbedo), channel by channel.
+// - lightmap: the atlas pixels as published (resolved: padding, seams), read bilinearly at the
+//   hit's lightmap UV, the E/π an engine's lightmap sampler returns.
+// - emission: the material's current emitted radiance × its emissive texture at the hit.
+// - specular: the standard split-sum image-based lighting (reflection_prefilter.h) with the
+//   probes of the previous pass, blended and box-projected at the hit exactly as at run time
+//   (reflection_probes.h); none in pass 0. R reflects the capture ray about the hit's shading
+//   normal, V points back to the capture position. F0 = mix(dielectric F0, baseColor,
+//   metallic).
+//
+// Pass 0 shows the diffuse part only; pass n lights the specular part with pass n − 1. With
+// `bounces` passes after pass 0, two facing mirrors show each other `bounces` times (Unity's
+// "Reflection Bounces"). Probe 0 is the sky: a cubemap of the sky SH, prefiltered like the rest.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/runtime/cubemap.h"
+#include "afterglow/runtime/reflection_probes.h"
+
+namespace afterglow::runtime {
+
+struct TransportData;
+
+constexpr uint32_t kReflectionMiss = 0xffffffffu;  // ReflectionHit::material of a miss
+constexpr uint16_t kReflectionNoAtlas = 0xffff;    // a surface without a lightmap
+// The face size of probe 0, the sky: the sky is SH L2, smooth enough for a small cube.
+constexpr uint32_t kReflectionSkyResolution = 32;
+
+// What a capture ray hit, 44 bytes (half floats are IEEE binary16, transport.h's floatToHalf).
+struct ReflectionHit {
+  uint32_t material = kReflectionMiss;  // index into TransportData::materials, or a miss
+  uint16_t atlas = kReflectionNoAtlas;  // lightmap atlas, or none (emission and specular only)
+  uint16_t roughness = 0;               // half: perceptual roughness at the hit
+  glm::vec2 lightmapUv{0.0f};           // the hit's TEXCOORD_1 (atlas space, [0, 1])
+  uint16_t diffuse[3] = {0, 0, 0};      // half: diffuse colour at the hit, as baked
+  uint16_t emission[3] = {0, 0, 0};     // half: emissive texture at the hit (0: does not emit
+                                        //   toward the probe: single-sided back)
+  uint16_t f0[3] = {0, 0, 0};           // half: specular colour at normal incidence
+  uint16_t normal[3] = {0, 0, 0};       // half: unit shading normal, facing the probe
+  float distance = 0.0f;                // from the capture position, metres
+};
+static_assert(sizeof(ReflectionHit) == 44, "the transport file stores hits as they are");
+
+// One captured probe. Its hits are kCubeFaceCount · resolution² consecutive entries of
+// ReflectionTransport::hits from firstHit, in cubemap texel order (cubemap.h).
+struct ReflectionProbeCapture {
+  std::string name;
+  ReflectionProbeBox box;    // influence box, blend, importance, projection, capture position
+  uint32_t resolution = 0;   // face size, a power of two
+  uint64_t firstHit = 0;
+};
+
+struct ReflectionTransport {
+  std::vector<ReflectionProbeCapture> probes;  // probe i + 1 of the blend (0 is the sky)
+  std::vector<ReflectionHit> hits;
+  // Per material, its albedo when baked (TransportData::materials[m].albedo then): hits' diffuse
+  // colours scale by the current albedo over this.
+  std::vector<glm::vec3> bakedAlbedo;
+  uint32_t bounces = 1;  // capture passes after the diffuse-only pass 0
+
+  size_t count() const { return probes.size(); }
+  std::vector<ReflectionProbeBox> boxes() const;
+  // Empty when consistent with `materials` materials and `atlases` atlases, else what is wrong.
+  std::string validate(size_t materials, size_t atlases) const;
+};
+
+// A probe's prefiltered radiance: mips 0.. of reflection_prefilter.h's chain.
+using CubemapChain = std::vector<Cubemap>;
+
+// The radiance an engine's trilinear lookup of a chain returns for perceptual roughness r:
+// mip mipOfRoughness(r, chain size), bilinear within a mip (sampleCubemap), linear between the
+// two mips around it. Black for an empty chain.
+glm::vec3 sampleChain(const CubemapChain& chain, glm::vec3 direction, float perceptualRoughness);
+
+// The split-sum specular lighting at a point, from probes blended and box-projected as at run
+// time: chains[0] is the sky, chains[i + 1] boxes[i]; dfg is dfgTable(dfgSize). `toViewer` is
+// the unit direction from the point to the eye, `normal` the unit shading normal.
+struct ReflectionLighting {
+  const std::vector<ReflectionProbeBox>* boxes = nullptr;
+  const std::vector<CubemapChain>* chains = nullptr;
+  const std::vector<glm::vec2>* dfg = nullptr;
+  int dfgSize = 0;
+
+  glm::vec3 specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer, glm::vec3 f0,
+                     float perceptualRoughness) const;
+};
+
+// (scale, bias) of a dfgTable of `size`, bilinear at (NdotV, r), clamped to the table.
+glm::vec2 sampleDfg(const std::vector<glm::vec2>& table, int size, float nDotV,
+                    float perceptualRoughness);
+
+// A cubemap of `size` showing the sky SH's radiance (never negative: L2 rings below zero
+// around a sun are clamped).
+Cubemap skyCubemap(const glm::vec3 skySh[], int size);
+
+// Probe `probe`'s radiance cubemap, one capture pass: its hits shaded with the lightmap images
+// (`atlases`, per atlas width·height pixels as resolveAtlas makes them), the transport's current
+// materials and sky, and the previous pass's probes (`previous`, null in pass 0).
+Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
+                               const std::vector<std::vector<glm::vec3>>& atlases,
+                               const ReflectionLighting* previous);
+
+// The bake's (and a from-scratch relight's) reflection probes: the sky chain, then pass 0 and
+// `data.reflections.bounces` more passes, each prefiltered into a chain (reflectionChain).
+// Returns chains: [0] the sky, [i + 1] probe i.
+std::vector<CubemapChain> solveReflectionProbes(const TransportData& data,
+                                                const std::vector<std::vector<glm::vec3>>& atlases,
+                                                const std::vector<glm::vec2>& dfg, int dfgSize);
+
+// The chain of a cubemap: prefilterChain's kReflectionMipCount mips (faces halving down to 1
+// texel, Unity's mip/roughness mapping either way).
+CubemapChain reflectionChain(const Cubemap& radiance);
+
+}  // namespace afterglow::runtime

@@ -1,0 +1,209 @@
+// Reflection probes' capture passes: hits shaded into radiance cubemaps (reflection_capture.h).
+#include "afterglow/runtime/reflection_capture.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "afterglow/runtime/probe_sh.h"
+#include "afterglow/runtime/reflection_prefilter.h"
+#include "afterglow/runtime/transport.h"
+
+namespace afterglow::runtime {
+
+namespace {
+
+glm::vec3 halves(const uint16_t h[3]) {
+  return glm::vec3(halfToFloat(h[0]), halfToFloat(h[1]), halfToFloat(h[2]));
+}
+
+// Bilinear between pixel centres, clamped at the atlas edges (the bake dilated into the
+// padding): what a GPU's linear sampler with clamp-to-edge returns.
+glm::vec3 fetchAtlas(const std::vector<glm::vec3>& image, int width, int height, glm::vec2 uv) {
+  const float x = uv.x * float(width) - 0.5f, y = uv.y * float(height) - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float tx = x - fx, ty = y - fy;
+  auto at = [&](int px, int py) {
+    px = std::clamp(px, 0, width - 1);
+    py = std::clamp(py, 0, height - 1);
+    return image[size_t(py) * size_t(width) + size_t(px)];
+  };
+  const int x0 = int(fx), y0 = int(fy);
+  return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), tx),
+                  glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), tx), ty);
+}
+
+}  // namespace
+
+std::vector<ReflectionProbeBox> ReflectionTransport::boxes() const {
+  std::vector<ReflectionProbeBox> out;
+  out.reserve(probes.size());
+  for (const ReflectionProbeCapture& p : probes) out.push_back(p.box);
+  return out;
+}
+
+std::string ReflectionTransport::validate(size_t materials, size_t atlases) const {
+  if (probes.empty() && hits.empty()) return {};
+  if (bakedAlbedo.size() != materials)
+    return "reflection probes: " + std::to_string(bakedAlbedo.size()) + " baked albedos for " +
+           std::to_string(materials) + " materials";
+  if (bounces > 64) return "reflection probes: " + std::to_string(bounces) + " bounces (at most 64)";
+  uint64_t next = 0;
+  for (size_t i = 0; i < probes.size(); ++i) {
+    const ReflectionProbeCapture& p = probes[i];
+    const std::string name = "reflection probe " + std::to_string(i) + " '" + p.name + "'";
+    if (p.resolution == 0 || p.resolution > 2048 || (p.resolution & (p.resolution - 1)) != 0)
+      return name + ": resolution " + std::to_string(p.resolution) +
+             " is not a power of two up to 2048";
+    if (p.firstHit != next) return name + ": its hits start at " + std::to_string(p.firstHit) +
+                                   ", not after the previous probe's (" + std::to_string(next) + ")";
+    next += uint64_t(kCubeFaceCount) * p.resolution * p.resolution;
+    const ReflectionProbeBox& b = p.box;
+    bool finite = std::isfinite(b.blendDistance);
+    for (int a = 0; a < 3; ++a)
+      finite = finite && std::isfinite(b.centre[a]) && std::isfinite(b.halfSize[a]) &&
+               std::isfinite(b.capturePosition[a]) && std::isfinite(b.projectionCentre[a]) &&
+               std::isfinite(b.projectionHalfSize[a]) && std::isfinite(b.axes[a].x) &&
+               std::isfinite(b.axes[a].y) && std::isfinite(b.axes[a].z);
+    if (!finite) return name + ": a box value is not finite";
+  }
+  if (next != hits.size())
+    return "reflection probes: " + std::to_string(hits.size()) + " hits, the probes need " +
+           std::to_string(next);
+  for (size_t k = 0; k < hits.size(); ++k) {
+    const ReflectionHit& h = hits[k];
+    if (h.material == kReflectionMiss) continue;
+    if (h.material >= materials || (h.atlas != kReflectionNoAtlas && h.atlas >= atlases) ||
+        !std::isfinite(h.distance) || !std::isfinite(h.lightmapUv.x) ||
+        !std::isfinite(h.lightmapUv.y))
+      return "reflection probes: hit " + std::to_string(k) +
+             " has a bad material, atlas, distance or lightmap UV";
+  }
+  return {};
+}
+
+glm::vec3 sampleChain(const CubemapChain& chain, glm::vec3 direction, float perceptualRoughness) {
+  if (chain.empty()) return glm::vec3(0.0f);
+  const int mips = int(chain.size());
+  const float mip = std::min(mipOfRoughness(perceptualRoughness, kReflectionMipCount),
+                             float(mips - 1));
+  const int level = std::min(int(mip), mips - 1);
+  const glm::vec3 a = sampleCubemap(chain[size_t(level)], direction);
+  const float f = mip - float(level);
+  if (f <= 0.0f || level + 1 >= mips) return a;
+  return glm::mix(a, sampleCubemap(chain[size_t(level + 1)], direction), f);
+}
+
+glm::vec2 sampleDfg(const std::vector<glm::vec2>& table, int size, float nDotV,
+                    float perceptualRoughness) {
+  if (size <= 0 || table.size() < size_t(size) * size_t(size)) return glm::vec2(0.0f);
+  const float x = glm::clamp(nDotV, 0.0f, 1.0f) * float(size) - 0.5f;
+  const float y = glm::clamp(perceptualRoughness, 0.0f, 1.0f) * float(size) - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float tx = x - fx, ty = y - fy;
+  auto at = [&](int i, int j) {
+    i = std::clamp(i, 0, size - 1);
+    j = std::clamp(j, 0, size - 1);
+    return table[size_t(j) * size_t(size) + size_t(i)];
+  };
+  const int x0 = int(fx), y0 = int(fy);
+  return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), tx),
+                  glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), tx), ty);
+}
+
+glm::vec3 ReflectionLighting::specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
+                                       glm::vec3 f0, float perceptualRoughness) const {
+  if (!boxes || !chains || !dfg || chains->empty()) return glm::vec3(0.0f);
+  if (f0 == glm::vec3(0.0f)) return glm::vec3(0.0f);
+  const float nDotV = glm::dot(normal, toViewer);
+  if (!(nDotV > 0.0f)) return glm::vec3(0.0f);
+  const glm::vec3 reflected = 2.0f * nDotV * normal - toViewer;
+  glm::vec3 radiance(0.0f);
+  for (const ProbeWeight& w : reflectionProbesAt(*boxes, position)) {
+    if (size_t(w.probe) >= chains->size()) continue;
+    const glm::vec3 dir = w.probe == 0 ? reflected
+                                       : boxProject((*boxes)[size_t(w.probe - 1)], position, reflected);
+    radiance += w.weight * sampleChain((*chains)[size_t(w.probe)], dir, perceptualRoughness);
+  }
+  const glm::vec2 sb = sampleDfg(*dfg, dfgSize, nDotV, perceptualRoughness);
+  return radiance * (f0 * sb.x + sb.y);
+}
+
+Cubemap skyCubemap(const glm::vec3 skySh[], int size) {
+  Cubemap cube = makeCubemap(size);
+  ShL2 sh;
+  for (int i = 0; i < kShCount; ++i) sh.c[i] = skySh[i];
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x)
+        cube.at(face, x, y) =
+            glm::max(evalRadiance(sh, cubemapTexelDirection(face, x, y, size)), glm::vec3(0.0f));
+  return cube;
+}
+
+Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
+                               const std::vector<std::vector<glm::vec3>>& atlases,
+                               const ReflectionLighting* previous) {
+  const ReflectionTransport& refl = data.reflections;
+  const ReflectionProbeCapture& p = refl.probes[probe];
+  const int size = int(p.resolution);
+  Cubemap cube = makeCubemap(size);
+  ShL2 sky;
+  for (int i = 0; i < kShCount; ++i) sky.c[i] = data.skySh[i];
+  // Per material, how far setAlbedo moved the diffuse colour from the baked one.
+  std::vector<glm::vec3> albedoScale(data.materials.size(), glm::vec3(1.0f));
+  for (size_t m = 0; m < albedoScale.size() && m < refl.bakedAlbedo.size(); ++m)
+    for (int c = 0; c < 3; ++c)
+      if (refl.bakedAlbedo[m][c] > 0.0f)
+        albedoScale[m][c] = data.materials[m].albedo[c] / refl.bakedAlbedo[m][c];
+  const ReflectionHit* hits = refl.hits.data() + p.firstHit;
+  size_t k = 0;
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x, ++k) {
+        const ReflectionHit& h = hits[k];
+        const glm::vec3 dir = cubemapTexelDirection(face, x, y, size);
+        if (h.material == kReflectionMiss) {
+          cube.at(face, x, y) = glm::max(evalRadiance(sky, dir), glm::vec3(0.0f));
+          continue;
+        }
+        const MaterialParams& mat = data.materials[h.material];
+        glm::vec3 radiance = halves(h.emission) * mat.emission;
+        if (h.atlas != kReflectionNoAtlas) {
+          const AtlasLayout& layout = data.atlases[h.atlas];
+          radiance += halves(h.diffuse) * albedoScale[h.material] *
+                      fetchAtlas(atlases[h.atlas], layout.width, layout.height, h.lightmapUv);
+        }
+        if (previous) {
+          const glm::vec3 position = p.box.capturePosition + h.distance * dir;
+          radiance += previous->specular(position, halves(h.normal), -dir, halves(h.f0),
+                                         halfToFloat(h.roughness));
+        }
+        cube.at(face, x, y) = radiance;
+      }
+  return cube;
+}
+
+CubemapChain reflectionChain(const Cubemap& radiance) {
+  return prefilterChain(radiance, kReflectionMipCount);
+}
+
+std::vector<CubemapChain> solveReflectionProbes(const TransportData& data,
+                                                const std::vector<std::vector<glm::vec3>>& atlases,
+                                                const std::vector<glm::vec2>& dfg, int dfgSize) {
+  const ReflectionTransport& refl = data.reflections;
+  std::vector<CubemapChain> chains(refl.count() + 1);
+  if (refl.count() == 0) return chains;
+  chains[0] = reflectionChain(skyCubemap(data.skySh, int(kReflectionSkyResolution)));
+  const std::vector<ReflectionProbeBox> boxes = refl.boxes();
+  for (uint32_t pass = 0; pass <= refl.bounces; ++pass) {
+    // Every probe of this pass reads the previous pass's chains, none of this pass's.
+    const std::vector<CubemapChain> previousChains = chains;
+    ReflectionLighting lighting{&boxes, &previousChains, &dfg, dfgSize};
+    for (size_t i = 0; i < refl.count(); ++i)
+      chains[i + 1] = reflectionChain(
+          shadeReflectionCapture(data, i, atlases, pass == 0 ? nullptr : &lighting));
+  }
+  return chains;
+}
+
+}  // namespace afterglow::runtime
