@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/transport_file.h"
 
 namespace afterglow::runtime {
@@ -70,6 +71,10 @@ Runtime::Runtime(TransportData data) : data_(std::move(data)) {
     probes_[b].assign(data_.probes.count(), ShL2());
   }
   probeWork_.assign(data_.probes.count(), ShL2());
+  if (data_.reflections.count() > 0) {
+    dfg_ = runtime::dfgTable(kDfgSize);
+    reflectionOut_.resize(data_.reflections.count() + 1);
+  }
 }
 
 Runtime::~Runtime() = default;
@@ -337,6 +342,8 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
     publishProbes();
     stats.probeMilliseconds = msSince(probeStart);
   }
+  if (dirty & kDirtySky) reflectionSkyStale_ = true;
+  runReflectionUnits(options.reflectionPasses, stats);
   stats.milliseconds = msSince(start);
   return stats;
 }

@@ -29,7 +29,8 @@
 // the one exception: read it only while no update() runs.
 //
 // Allocation: load() and fromData() allocate everything up front; update(), the settings calls
-// and the reads do not (readAtlas into a std::vector only if the vector is too small). Caveat:
+// and the reads do not (readAtlas into a std::vector only if the vector is too small), except
+// for reflection probes, whose capture passes and prefilter build new cubemaps. Caveat:
 // the Solver calls inside update() currently heap-allocate a few small closures each (its block
 // loop takes a std::function); the test UpdateDoesNotAllocate tracks that.
 #pragma once
@@ -44,6 +45,7 @@
 
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
+#include "afterglow/runtime/reflection_capture.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/runtime/transport.h"
 
@@ -69,6 +71,17 @@ struct UpdateOptions {
   // Refresh every light probe from the new solution (after the lightmaps), published with
   // them. Off: the probes keep their last values; updateProbes() refreshes them on its own.
   bool probes = true;
+  // Reflection probes, after the light probes. Their unit of work is one capture pass of one
+  // probe (reflection_capture.h: pass 0 shows the diffuse part, then the transport's reflection
+  // bounces each light the specular part with the pass before), taken pass by pass and probe by
+  // probe, round robin. A full round, (bounces + 1) × probes units, reproduces the bake from the
+  // current lightmaps, materials and sky exactly (the same function, the same order).
+  //   < 0  a full round, from the first unit (default)
+  //   0    none: the cubemaps keep their last values
+  //   n    at most n units, carrying on where the previous call stopped (an engine spreads a
+  //        round over frames: one unit a frame is one 128² probe's capture and prefilter)
+  // The sky's cubemap (probe 0) is recomputed when the sky changed, before the units.
+  int reflectionPasses = -1;
 };
 
 struct UpdateStats {
@@ -78,6 +91,8 @@ struct UpdateStats {
   double milliseconds = 0;  // wall time of the whole call
   int probes = 0;                // light probes refreshed
   double probeMilliseconds = 0;  // of which the probes took (their share of the call)
+  int reflectionPasses = 0;           // reflection probe capture passes run (units, above)
+  double reflectionMilliseconds = 0;  // of which the reflection probes took
 };
 
 class Runtime {
@@ -196,6 +211,31 @@ class Runtime {
   // update().
   UpdateStats updateProbes(double budgetMs = 0.0);
 
+  // ---- Reflection probes ----------------------------------------------------------------------
+  // Probe 0 is the sky (the fallback outside every box), probe i + 1 the transport's reflection
+  // probe i; no probes at all (0, not even the sky's) when the bake had none. Each holds its
+  // prefiltered radiance as a chain of reflectionMipCount() cubemaps (cubemap.h's faces and
+  // orientation; mip m for perceptual roughness roughnessOfMip(m), mip 0 the mirror), from the
+  // last update that ran its units; all black before the first.
+  int reflectionProbeCount() const;
+  int reflectionMipCount() const;           // kReflectionMipCount with probes, else 0
+  int reflectionFaceSize(int probe, int mip) const;  // texels along an edge; 0 when invalid
+  // One face of one mip, faceSize² × 3 floats, rows top to bottom. False for an invalid index.
+  bool readCubemap(int probe, int mip, int face, float* rgb) const;
+  // The whole chain (a copy); empty for an invalid index.
+  CubemapChain reflectionChain(int probe) const;
+  // The influence (and projection) box of probe ≥ 1; null for the sky or an invalid index.
+  const ReflectionProbeBox* reflectionProbeBox(int probe) const;
+  // The probes lighting a point and their weights (reflection_probes.h: importance, fades, the
+  // sky taking the rest), with the probe numbering above. Only the sky without probes.
+  std::vector<ProbeWeight> reflectionProbesAt(glm::vec3 position) const;
+  // The split sum's DFG table the cubemaps were shaded with, kDfgSize² (scale, bias) pairs
+  // (reflection_prefilter.h's layout); empty without reflection probes.
+  const std::vector<glm::vec2>& dfgTable() const { return dfg_; }
+  // Runs reflection units alone (as UpdateOptions::reflectionPasses, with < 0 a full round)
+  // from the current lightmaps and settings, and publishes them. Serialised with update().
+  UpdateStats updateReflectionProbes(int passes = -1);
+
   // The transport, with the settings as of the last update() applied. Only while no update()
   // runs.
   const TransportData& data() const { return data_; }
@@ -259,6 +299,21 @@ class Runtime {
   // Refreshes probes [first, first + count) and returns how many it did.
   size_t refreshProbes(size_t first, size_t count);
   void publishProbes();
+
+  // Reflection probes: per capture pass, every probe's chain ([pass][probe], the transport's
+  // numbering), the sky's chain, and the published chains (probe 0 the sky) shared with
+  // readers: publishing swaps a pointer under outputMutex_, a read copies it and reads without
+  // the lock.
+  std::vector<std::vector<CubemapChain>> reflectionPasses_;
+  CubemapChain reflectionSky_;
+  bool reflectionSkyStale_ = true;
+  size_t reflectionCursor_ = 0;  // the next unit: pass · probes + probe
+  std::vector<ReflectionProbeBox> reflectionBoxes_;
+  std::vector<glm::vec2> dfg_;
+  std::vector<std::shared_ptr<const CubemapChain>> reflectionOut_;
+  // Runs reflection units (as UpdateOptions::reflectionPasses) and publishes; fills stats.
+  void runReflectionUnits(int passes, UpdateStats& stats);
+  std::shared_ptr<const CubemapChain> publishedChain(int probe) const;
 };
 
 }  // namespace afterglow::runtime
