@@ -34,6 +34,14 @@ class PathTracer {
   // hit. Misses, back faces of single-sided geometry and dynamic instances are black.
   glm::vec3 cameraRadiance(const Ray& ray, glm::vec2 u, sampling::Rng& rng) const;
 
+  // Radiance along a ray as a reflection probe's capture shades it (reflection_capture.h), with
+  // the specular part integrated by GGX sampling instead of prefiltered probes: emission, plus
+  // the metallic-roughness BRDF's diffuse colour × one path's E/π, plus, while specularDepth >
+  // 0, one sampled specular reflection's radiance (this again, one level shallower; the sky on
+  // a miss). The BRDF (GGX, Smith height-correlated, Schlick) is sampled by its distribution of
+  // normals, written here apart from the runtime's prefilter so the two check each other.
+  glm::vec3 probeRadiance(const Ray& ray, int specularDepth, sampling::Rng& rng) const;
+
  private:
   // Light arriving at a path vertex by next-event estimation, as E/π (lights scaled by
   // bounceIntensity when `bounced`).

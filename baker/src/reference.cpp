@@ -190,6 +190,56 @@ glm::vec3 PathTracer::cameraRadiance(const Ray& ray, glm::vec2 u, sampling::Rng&
   return radiance + diffuseAlbedo(scene_, material, uv0) * (e.direct + e.indirect);
 }
 
+glm::vec3 PathTracer::probeRadiance(const Ray& ray, int specularDepth, sampling::Rng& rng) const {
+  const Hit hit = tracer_.intersect(ray);
+  if (!hit.valid()) return glm::max(skyRadiance(env_.skySh, ray.direction), glm::vec3(0.0f));
+  const scenes::Instance& inst = scene_.instances[hit.instance];
+  const int material = hitMaterial(scene_, hit);
+  const scenes::Material& mat = scene_.material(material);
+  if (!hit.frontFace && !mat.doubleSided) return glm::vec3(0.0f);
+  const glm::vec2 uv0 = tracer_.uv(hit, 0);
+  glm::vec3 radiance =
+      mat.emitsFrom(hit.frontFace) ? emittedRadiance(scene_, material, uv0) : glm::vec3(0.0f);
+  const SurfaceBrdf brdf = surfaceBrdf(scene_, material, uv0);
+  const float side = hit.frontFace ? 1.0f : -1.0f;
+  const glm::vec3 ng = hit.geometricNormal * side;
+  glm::vec3 n = tracer_.shadingNormal(hit) * side;
+  if (glm::dot(n, ng) <= 0.0f) n = ng;
+  glm::vec3 p = tracer_.position(hit);
+  p += ng * offset(p);
+  if (inst.isStatic && inst.lightmap.atlas >= 0) {
+    const Estimate e = irradiance(p, n, ng, rng.next2(), rng);
+    radiance += brdf.diffuse * (e.direct + e.indirect);
+  }
+  if (specularDepth <= 0 || brdf.f0 == glm::vec3(0.0f)) return radiance;
+  const glm::vec3 v = -ray.direction;
+  const float nDotV = glm::dot(n, v);
+  if (!(nDotV > 0.0f)) return radiance;
+  // A half vector from GGX's D (α = roughness²): cos θh = √((1 − ξ) / (1 + (α² − 1) ξ)).
+  const float alpha = std::max(brdf.roughness * brdf.roughness, 1e-4f), a2 = alpha * alpha;
+  const glm::vec2 xi = rng.next2();
+  const float cosH = std::sqrt((1.0f - xi.x) / (1.0f + (a2 - 1.0f) * xi.x));
+  const float sinH = std::sqrt(std::max(0.0f, 1.0f - cosH * cosH)), phi = 2.0f * kPi * xi.y;
+  const glm::vec3 t = glm::normalize(std::abs(n.x) > 0.5f ? glm::cross(n, glm::vec3(0, 1, 0))
+                                                          : glm::cross(n, glm::vec3(1, 0, 0)));
+  const glm::vec3 h = sinH * std::cos(phi) * t + sinH * std::sin(phi) * glm::cross(n, t) + cosH * n;
+  const float vDotH = glm::dot(v, h);
+  const glm::vec3 l = 2.0f * vDotH * h - v;
+  const float nDotL = glm::dot(n, l);
+  if (vDotH <= 0.0f || nDotL <= 0.0f) return radiance;
+  // f (n·l) / pdf(l), pdf(l) = D (n·h) / (4 (v·h)): D cancels, leaving
+  // F · 4 Vis (n·l)(v·h) / (n·h), Vis = 0.5 / ((n·l) Λ(v) + (n·v) Λ(l)) height-correlated.
+  const float lv = nDotL * std::sqrt(nDotV * nDotV * (1.0f - a2) + a2);
+  const float ll = nDotV * std::sqrt(nDotL * nDotL * (1.0f - a2) + a2);
+  const float vis = 0.5f / (lv + ll);
+  const glm::vec3 fresnel = brdf.f0 + (1.0f - brdf.f0) * std::pow(1.0f - vDotH, 5.0f);
+  Ray next;
+  next.origin = p;
+  next.direction = l;
+  return radiance + fresnel * (4.0f * vis * nDotL * vDotH / cosH) *
+                        probeRadiance(next, specularDepth - 1, rng);
+}
+
 namespace {
 
 // The mean of a point's path estimates and the variance of that mean as if the paths were
@@ -324,6 +374,39 @@ Result<std::vector<runtime::ShL2>> referenceRadianceSh(const scenes::Scene& scen
       }
       for (int k = 0; k < runtime::kShCount; ++k)
         out[i].c[k] = glm::vec3(sum[k] * (4.0 * double(kPi) / double(samples)));
+      progress.advance();
+    }
+  }, 1);
+  progress.end();
+  if (progress.cancelled()) return Status::error("cancelled");
+  return out;
+}
+
+Result<ReferencePoints> referenceRadiance(const scenes::Scene& scene, const RayTracer& tracer,
+                                          const Environment& environment,
+                                          const std::vector<Ray>& rays,
+                                          const ReferenceOptions& options, Progress& progress) {
+  if (options.samples <= 0) return Status::error("reference: samples must be positive");
+  const size_t count = rays.size();
+  ReferencePoints out;
+  out.irradiance.assign(count, glm::vec3(0.0f));
+  out.variance.assign(count, glm::vec3(0.0f));
+  const PathTracer pt(scene, tracer, environment, options.maxDepth);
+  const uint32_t samples = uint32_t(options.samples);
+  progress.begin("reference path tracing", count);
+  parallelForBlocks(count, [&](size_t begin, size_t end, int) {
+    for (size_t i = begin; i < end && !progress.cancelled(); ++i) {
+      glm::dvec3 sum(0.0), squares(0.0);
+      for (uint32_t s = 0; s < samples; ++s) {
+        sampling::Rng rng(sampling::Stream::Reference, (uint64_t(3) << 40) | i, s);
+        const glm::dvec3 l(pt.probeRadiance(rays[i], options.specularDepth, rng));
+        sum += l;
+        squares += l * l;
+      }
+      const glm::dvec3 mean = sum / double(samples);
+      out.irradiance[i] = glm::vec3(mean);
+      out.variance[i] = glm::vec3(glm::max(squares / double(samples) - mean * mean, glm::dvec3(0.0)) /
+                                  double(samples));
       progress.advance();
     }
   }, 1);

@@ -111,20 +111,44 @@ glm::vec2 sampleDfg(const std::vector<glm::vec2>& table, int size, float nDotV,
 }
 
 glm::vec3 ReflectionLighting::specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
-                                       glm::vec3 f0, float perceptualRoughness) const {
+                                       glm::vec3 f0, float perceptualRoughness,
+                                       const glm::vec3* lightmap) const {
   if (!boxes || !chains || !dfg || chains->empty()) return glm::vec3(0.0f);
   if (f0 == glm::vec3(0.0f)) return glm::vec3(0.0f);
   const float nDotV = glm::dot(normal, toViewer);
   if (!(nDotV > 0.0f)) return glm::vec3(0.0f);
+  const float r = glm::clamp(perceptualRoughness, 0.0f, 1.0f), alpha = r * r;
   const glm::vec3 reflected = 2.0f * nDotV * normal - toViewer;
-  glm::vec3 radiance(0.0f);
+  // 1. The lobe's dominant direction (Lagarde & de Rousiers 2014, "Moving Frostbite to PBR",
+  //    4.9.3): GGX's lobe leans from R toward N as it widens.
+  const float lean = (1.0f - alpha) * (std::sqrt(1.0f - alpha) + alpha);
+  const glm::vec3 dominant = glm::normalize(glm::mix(normal, reflected, lean));
+  glm::vec3 radiance(0.0f), irradiance(0.0f);
   for (const ProbeWeight& w : reflectionProbesAt(*boxes, position)) {
     if (size_t(w.probe) >= chains->size()) continue;
-    const glm::vec3 dir = w.probe == 0 ? reflected
-                                       : boxProject((*boxes)[size_t(w.probe - 1)], position, reflected);
-    radiance += w.weight * sampleChain((*chains)[size_t(w.probe)], dir, perceptualRoughness);
+    const CubemapChain& chain = (*chains)[size_t(w.probe)];
+    const ReflectionProbeBox* box = w.probe == 0 ? nullptr : &(*boxes)[size_t(w.probe - 1)];
+    // 2. Box projection corrects a sharp reflection's parallax; a rough lobe looked up around
+    //    the projected direction gathers, from the capture position, light the surface cannot
+    //    see (a lamp beside a ceiling), so the lookup fades back to the plain direction by α.
+    const glm::vec3 dir = box ? glm::normalize(glm::mix(boxProject(*box, position, dominant),
+                                                        dominant, alpha))
+                              : dominant;
+    radiance += w.weight * sampleChain(chain, dir, r);
+    // The probes' own E/π for this normal: their last mip is prefiltered for r = 1, where
+    // GGX's D is uniform and the prefilter's weight is the cosine alone.
+    if (lightmap) irradiance += w.weight * sampleChain(chain, box ? boxProject(*box, position, normal) : normal, 1.0f);
   }
-  const glm::vec2 sb = sampleDfg(*dfg, dfgSize, nDotV, perceptualRoughness);
+  // 3. Normalisation by the lightmap: the probes saw the room from their capture position, the
+  //    lightmap saw it from the surface; scaling a rough reflection by the ratio of the two
+  //    irradiances (by roughness: a mirror keeps its probe's image) puts back the surface's own
+  //    occlusion. The ratio is clamped to [0, 4] against a probe that saw nearly nothing.
+  if (lightmap)
+    for (int c = 0; c < 3; ++c) {
+      const float ratio = irradiance[c] > 1e-8f ? std::min((*lightmap)[c] / irradiance[c], 4.0f) : 1.0f;
+      radiance[c] *= 1.0f + r * (ratio - 1.0f);
+    }
+  const glm::vec2 sb = sampleDfg(*dfg, dfgSize, nDotV, r);
   return radiance * (f0 * sb.x + sb.y);
 }
 
@@ -168,15 +192,17 @@ Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
         }
         const MaterialParams& mat = data.materials[h.material];
         glm::vec3 radiance = halves(h.emission) * mat.emission;
+        glm::vec3 lightmap(0.0f);
         if (h.atlas != kReflectionNoAtlas) {
           const AtlasLayout& layout = data.atlases[h.atlas];
-          radiance += halves(h.diffuse) * albedoScale[h.material] *
-                      fetchAtlas(atlases[h.atlas], layout.width, layout.height, h.lightmapUv);
+          lightmap = fetchAtlas(atlases[h.atlas], layout.width, layout.height, h.lightmapUv);
+          radiance += halves(h.diffuse) * albedoScale[h.material] * lightmap;
         }
         if (previous) {
           const glm::vec3 position = p.box.capturePosition + h.distance * dir;
           radiance += previous->specular(position, halves(h.normal), -dir, halves(h.f0),
-                                         halfToFloat(h.roughness));
+                                         halfToFloat(h.roughness),
+                                         h.atlas != kReflectionNoAtlas ? &lightmap : nullptr);
         }
         cube.at(face, x, y) = radiance;
       }

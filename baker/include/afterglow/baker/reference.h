@@ -17,6 +17,7 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/texels.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
@@ -38,6 +39,7 @@ struct Environment {
 struct ReferenceOptions {
   int samples = 1024;  // paths per texel (or per pixel for views)
   int maxDepth = 64;   // bounces after which a path stops; Russian roulette from the third
+  int specularDepth = 1;  // referenceRadiance: specular reflections followed (reflection bounces)
 };
 
 // Per texel E/π split by how the light arrived, and the variance of each estimate (of the
@@ -82,6 +84,17 @@ Result<std::vector<runtime::ShL2>> referenceRadianceSh(const scenes::Scene& scen
                                                        const std::vector<glm::vec3>& points,
                                                        const ReferenceOptions& options,
                                                        Progress& progress = nullProgress());
+
+// The radiance arriving along rays (what a reflection probe's texel shows in its mirror mip):
+// per ray, the mean of `samples` paths (emission plus the metallic-roughness BRDF's diffuse
+// colour × one path's E/π at the first hit, plus options.specularDepth sampled GGX reflections,
+// as reflection_capture.h shades with that many bounces; misses show the sky), with the
+// variance of that mean in ReferencePoints::variance. Seeded from (ray index, sample).
+Result<ReferencePoints> referenceRadiance(const scenes::Scene& scene, const RayTracer& tracer,
+                                          const Environment& environment,
+                                          const std::vector<Ray>& rays,
+                                          const ReferenceOptions& options,
+                                          Progress& progress = nullProgress());
 
 // How far a bake's texels are from the reference, as errors relative to each texel's own
 // reference value (so a dim corner counts as much as a texel next to a lamp, and a texel 100×

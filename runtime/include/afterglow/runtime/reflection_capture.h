@@ -93,7 +93,12 @@ glm::vec3 sampleChain(const CubemapChain& chain, glm::vec3 direction, float perc
 
 // The split-sum specular lighting at a point, from probes blended and box-projected as at run
 // time: chains[0] is the sky, chains[i + 1] boxes[i]; dfg is dfgTable(dfgSize). `toViewer` is
-// the unit direction from the point to the eye, `normal` the unit shading normal.
+// the unit direction from the point to the eye, `normal` the unit shading normal, `lightmap`
+// (optional) the point's lightmap E/π. Three corrections engines apply to rough reflections
+// (reflection_capture.cpp): the lookup along GGX's dominant direction, box projection faded out
+// by α, and, with a lightmap, normalisation by the ratio of the lightmap's irradiance to the
+// probes' (weighted by roughness). On McGuire's Cornell box they take a 128² probe's mirror mip
+// from 9.6% to 4.0% RMSE against the path-traced reference (reflection_bake_test.cpp).
 struct ReflectionLighting {
   const std::vector<ReflectionProbeBox>* boxes = nullptr;
   const std::vector<CubemapChain>* chains = nullptr;
@@ -101,7 +106,7 @@ struct ReflectionLighting {
   int dfgSize = 0;
 
   glm::vec3 specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer, glm::vec3 f0,
-                     float perceptualRoughness) const;
+                     float perceptualRoughness, const glm::vec3* lightmap = nullptr) const;
 };
 
 // (scale, bias) of a dfgTable of `size`, bilinear at (NdotV, r), clamped to the table.
