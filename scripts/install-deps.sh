@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config ninja-build
   libembree-dev libopenimageio-dev openimageio-tools libopenmesh-dev libglm-dev
   libtinygltf-dev libstb-dev nlohmann-json3-dev libeigen3-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libopenexr-dev
   libcgal-dev
   clang libclang-rt-14-dev
 )
