@@ -40,6 +40,9 @@ const char kBakeHelp[] =
     "  OUT/transport.agt                the transport, for the runtime and afterglow relight\n"
     "  OUT/probes/light_probes.json     light probes: positions, kinds, tetrahedra, settings\n"
     "  OUT/probes/light_probes_sh.bin   their radiance SH L2, float32 (README: light probes)\n"
+    "  OUT/probes/reflection_*.exr      reflection probes (nodes with extras.afterglow.\n"
+    "                                   reflectionProbe, and the sky): OpenEXR cube maps with\n"
+    "                                   GGX mips; reflection_probes.json, dfg.exr beside them\n"
     "Before baking it prints the texel count and a memory estimate, and refuses a bake above\n"
     "the memory budget unless --yes is given. Nothing is written when anything fails or the run\n"
     "is interrupted.\n"
@@ -82,6 +85,8 @@ const char kBakeHelp[] =
     "  --max-probes N           refuse an auto placement of more probes (default 100000)\n"
     "  --probe-dering W         write the probes' SH deringed with this Hanning window (e.g.\n"
     "                           4; default 0: as baked)\n"
+    "  --reflection-bounces N   reflection probes' passes after the diffuse one: how many times\n"
+    "                           facing mirrors show each other (default 1, as Unity's)\n"
     "  --reference              compute every texel with the reference path tracer instead\n"
     "                           (slow; for validating bakes: same outputs, no clusters)\n"
     "  --spp N                  paths per texel for --reference (default 1024)\n"
@@ -109,6 +114,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},       {"single-sided-emission", 0, false},
     {"probes"},            {"probe-spacing"},   {"max-probes"},  {"probe-dering"},
+    {"reflection-bounces"},
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
 
 // The settings file as `--name=value` arguments, placed before the command line's own so that
@@ -311,7 +317,7 @@ int runBake(int argc, char** argv, int first) {
   baker::BakeOptions options = baker::bakePreset(preset);
   int threads = 0, bounces = 0, atlasSize = 0;
   float budgetGb = 8.0f, texelsPerUnit = 0.0f, probeSpacing = 0.0f, probeDering = 0.0f;
-  int maxProbes = 100000;
+  int maxProbes = 100000, reflectionBounces = 1;
   const std::string density = args.get("texels-per-unit", "auto");
   if (density != "auto" &&
       !args.getFloat("texels-per-unit", 0.0f, 1e-3f, 1e5f, &texelsPerUnit))
@@ -347,8 +353,10 @@ int runBake(int argc, char** argv, int first) {
       !args.getFloat("memory-budget", 8.0f, 0.0f, 1e6f, &budgetGb) ||
       !args.getFloat("probe-spacing", 0.0f, 0.0f, 1e6f, &probeSpacing) ||
       !args.getInt("max-probes", 100000, 1, 100000000, &maxProbes) ||
-      !args.getFloat("probe-dering", 0.0f, 0.0f, 1e6f, &probeDering))
+      !args.getFloat("probe-dering", 0.0f, 0.0f, 1e6f, &probeDering) ||
+      !args.getInt("reflection-bounces", 1, 0, 64, &reflectionBounces))
     return usage(args.error());
+  options.reflections.bounces = uint32_t(reflectionBounces);
   const std::string probesMode = args.get("probes", "auto");
   if (atlasSize > 0 && texelsPerUnit > 0.0f)
     return usage("give --texels-per-unit or --atlas-size, not both");
@@ -499,7 +507,8 @@ int runBake(int argc, char** argv, int first) {
                              {"probeDering", probeDering},
                              {"probeRays", options.probeOptions.raysSide * options.probeOptions.raysSide},
                              {"probeRegions", options.probeOptions.binsSide * options.probeOptions.binsSide},
-                             {"probeEmitterSamples", options.probeOptions.emitterSamples}};
+                             {"probeEmitterSamples", options.probeOptions.emitterSamples},
+                             {"reflectionBounces", reflectionBounces}};
   info.settingsJson = settings.dump();
 
   AtomicOutput files;

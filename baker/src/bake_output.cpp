@@ -231,6 +231,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   if (!saved) return saved.status();
   json& doc = saved->doc;
   attachLightmaps(doc, result.lightmaps.size(), warnings);
+  if (Status s = writeReflectionOutputs(result, outDir, doc, out, written); !s) return s;
   const std::string gltf = (dir / "scene.gltf").string();
   if (!saved->bin.empty()) {
     doc["buffers"][0]["uri"] = "scene.bin";
@@ -297,6 +298,9 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
                       {"tetrahedra", result.transport.probes.mesh.tetrahedra.size()},
                       {"links", result.transport.probes.links.linkCount()},
                       {"transportBytes", result.transport.probeBytes()}};
+  report["reflectionProbes"] = {{"count", result.transport.reflections.count()},
+                                {"bounces", result.transport.reflections.bounces},
+                                {"transportBytes", result.transport.reflectionBytes()}};
   report["stages"] = stages;
   report["peakMemoryBytes"] = peakMemoryBytes();
   report["atlases"] = atlases;

@@ -68,13 +68,17 @@ ReflectionHit recordHit(const scenes::Scene& scene, const RayTracer& tracer, con
   return h;
 }
 
-// The median of values (reordered), or `fallback` for none.
-float median(std::vector<float>& values, float fallback) {
+// The q-quantile of values (reordered), or `fallback` for none.
+float quantile(std::vector<float>& values, float q, float fallback) {
   if (values.empty()) return fallback;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + long(mid), values.end());
-  return values[mid];
+  const size_t k = std::min(values.size() - 1, size_t(q * float(values.size())));
+  std::nth_element(values.begin(), values.begin() + long(k), values.end());
+  return values[k];
 }
+
+// Walls are the farthest surfaces around a probe and furniture stands in front of them, so a
+// face of the box sits at this quantile of its rays' distances rather than at their median.
+constexpr float kWallQuantile = 0.8f;
 
 }  // namespace
 
@@ -103,7 +107,7 @@ runtime::ReflectionProbeBox fitReflectionProbeBox(const runtime::ReflectionProbe
         if (c >= cos30 && hits[k].material != runtime::kReflectionMiss)
           along.push_back(hits[k].distance * c);
       }
-      reach[a][s] = std::max(median(along, bound), 1e-3f);
+      reach[a][s] = std::max(quantile(along, kWallQuantile, bound), 1e-3f);
     }
   glm::vec3 offset(0.0f);
   for (int a = 0; a < 3; ++a) {

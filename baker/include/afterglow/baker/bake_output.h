@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
 
 #include "afterglow/baker/bake.h"
 #include "afterglow/core/atomic_file.h"
@@ -33,6 +34,14 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
 
 // How an EXR stores its channels: half floats (lightmaps) or 32-bit floats (renders compared
 // with other renderers' float EXRs).
+// The reflection probes' files (when the bake has any): OUT/probes/reflection_sky.exr and
+// reflection_<i>.exr (OpenEXR cube environment maps, the prefiltered mips as mip levels),
+// OUT/probes/dfg.exr, OUT/probes/reflection_probes.json, and the sky as EXT_lights_image_based
+// in `gltf` (its face images beside it). Paths written are appended to `written`.
+Status writeReflectionOutputs(const BakeResult& result, const std::string& outDir,
+                              nlohmann::json& gltf, AtomicOutput& out,
+                              std::vector<std::string>& written);
+
 enum class ExrPixels { Half, Float };
 // Linear RGB EXR (zip compressed), row 0 = v 0 (glTF's image orientation; the top row).
 Status writeExr(const std::string& path, int width, int height,

@@ -18,8 +18,9 @@ struct ReflectionOptions {
 };
 
 // The influence box of a probe authored without a size: fitted to the walls around its capture
-// position by ray distances. Along each of the node's six axis directions it takes the median
-// distance, measured along that axis, of the capture rays within 30° of it that hit something;
+// position by ray distances. Along each of the node's six axis directions it takes the 80th
+// percentile (walls stand behind furniture) of the distances, measured along that axis, of the
+// capture rays within 30° of it that hit something;
 // a direction whose rays all miss reaches the scene's bounds instead. The projection box spans
 // those six distances (so its centre may sit off the capture position); the influence box is it
 // grown by blendDistance on every side, so the walls get the probe's full weight. The axes are

@@ -42,8 +42,9 @@ struct TransportData;
 
 constexpr uint32_t kReflectionMiss = 0xffffffffu;  // ReflectionHit::material of a miss
 constexpr uint16_t kReflectionNoAtlas = 0xffff;    // a surface without a lightmap
-// The face size of probe 0, the sky: the sky is SH L2, smooth enough for a small cube.
-constexpr uint32_t kReflectionSkyResolution = 32;
+// The face size of probe 0, the sky: SH L2 is smooth, but 64 is the smallest face whose
+// OpenEXR cube file holds all seven mips (64 >> 6 = 1).
+constexpr uint32_t kReflectionSkyResolution = 64;
 
 // What a capture ray hit, 44 bytes (half floats are IEEE binary16, transport.h's floatToHalf).
 struct ReflectionHit {
