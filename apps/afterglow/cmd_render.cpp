@@ -55,8 +55,13 @@ const char kRenderHelp[] =
     "                           distance to its probe's nearest neighbour in radius; 'all': one\n"
     "                           at every probe, 1/5 of the probes' median spacing. Spheres keep\n"
     "                           clear of the walls beside them, hide what is behind them and\n"
-    "                           cast no shadows (they are not in the bake); not with --reference\n"
+    "                           cast no shadows (they are not in the bake); not with --reference.\n"
+    "                           With reflection probes in the bake, every second sphere is a\n"
+    "                           mirror and every third a rough metal (silver, roughness 0.4)\n"
+    "                           lit by the reflection probes\n"
     "  --reference              path-trace the view instead of reading the lightmaps (slow)\n"
+    "Surfaces are shaded with the lightmaps, and, when the bake has reflection probes (SCENE's\n"
+    "folder/probes/reflection_probes.json), with their specular reflections as an engine would.\n"
     "  --spp N                  paths per pixel for --reference (default 256)\n"
     "  --threads N              worker threads (default: every core); the picture is\n"
     "                           identical for any count\n"
@@ -76,7 +81,8 @@ bool hasLightmapLayout(const scenes::Scene& scene) {
 // What shades the picture: the bake's lighting for --reference, its lightmaps otherwise.
 // Loaded before the (slower) ray tracer so that bad inputs fail fast. Returns the exit code.
 int loadShading(const std::string& input, const scenes::Scene& scene, bool reference, bool quiet,
-                baker::Environment* environment, std::vector<baker::LightmapImage>* lightmaps) {
+                baker::Environment* environment, std::vector<baker::LightmapImage>* lightmaps,
+                baker::BakedReflections* reflections) {
   if (!reference) {
     Result<std::vector<baker::LightmapImage>> loaded = baker::loadBakedLightmaps(input);
     if (!loaded) {
@@ -84,6 +90,12 @@ int loadShading(const std::string& input, const scenes::Scene& scene, bool refer
       return kExitBadInput;
     }
     *lightmaps = std::move(loaded.value());
+    Result<baker::BakedReflections> probes = baker::loadBakedReflections(input);
+    if (!probes) {
+      printError(probes.message());
+      return kExitBadInput;
+    }
+    *reflections = std::move(probes.value());
     return kExitOk;
   }
   if (!hasLightmapLayout(scene)) {
@@ -265,7 +277,9 @@ int runRender(int argc, char** argv, int first) {
   const bool quiet = args.has("quiet");
   baker::Environment environment;
   std::vector<baker::LightmapImage> lightmaps;
-  if (int code = loadShading(input, scene, reference, quiet, &environment, &lightmaps);
+  baker::BakedReflections reflections;
+  if (int code = loadShading(input, scene, reference, quiet, &environment, &lightmaps,
+                             &reflections);
       code != kExitOk)
     return code;
   baker::LightProbes lightProbes;
@@ -318,13 +332,17 @@ int runRender(int argc, char** argv, int first) {
       return kExitBadInput;
     }
     spheres = std::move(chosen.value());
+    // With reflection probes every second and third sphere is a mirror and a rough metal.
+    if (!reflections.empty())
+      for (size_t i = 0; i < spheres.size(); ++i)
+        spheres[i].finish = baker::SphereFinish(i % 3);
     if (!quiet) printSpheres(spheres, sphereCount, lightProbes.sh.size());
   }
   Result<std::vector<glm::vec3>> image =
       reference ? baker::renderReference(scene, *tracer.value(), environment, view, options, spp,
                                          progress)
                 : baker::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress,
-                                     spheres);
+                                     spheres, &reflections);
   if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!image) {
     printError(image.message());

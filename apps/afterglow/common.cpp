@@ -60,10 +60,11 @@ Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextu
   if (isBuiltinScene(scene)) {
     std::string name = scene.substr(sizeof(kBuiltinPrefix) - 1);
     if (name == "cornell") return scenes::makeCornellBox();
+    if (name == "cornell-metal") return scenes::makeCornellMetalBox();
     if (name == "furnace") return scenes::makeFurnaceBox();
     *usageError = true;
-    return Status::error(format("unknown built-in scene '%s' (there are builtin:cornell and "
-                                "builtin:furnace)",
+    return Status::error(format("unknown built-in scene '%s' (there are builtin:cornell, "
+                                "builtin:cornell-metal and builtin:furnace)",
                                 scene.c_str()));
   }
   scenes::LoadOptions options;

@@ -342,10 +342,19 @@ bool ProbeSphereIndex::shade(const Ray& ray, int px, int py, float tMax,
   }
   if (hit < 0) return false;
   const ProbeSphere& s = spheres_[size_t(hit)];
-  const glm::vec3 normal = glm::normalize(ray.origin + nearest * d - s.centre);
+  const glm::vec3 position = ray.origin + nearest * d;
+  const glm::vec3 normal = glm::normalize(position - s.centre);
   // The L2 series rings below zero opposite a strong light; no surface reflects less than
   // nothing.
-  *radiance = kProbeSphereAlbedo * glm::max(runtime::irradianceOverPi(s.sh, normal), 0.0f);
+  const glm::vec3 irradiance = glm::max(runtime::irradianceOverPi(s.sh, normal), 0.0f);
+  if (s.finish == SphereFinish::Diffuse) {
+    *radiance = kProbeSphereAlbedo * irradiance;
+    return true;
+  }
+  const float roughness = s.finish == SphereFinish::Mirror ? 0.0f : kRoughMetalRoughness;
+  *radiance = reflections_ ? reflections_->specular(position, normal, -d, kMetalSphereF0,
+                                                    roughness, &irradiance)
+                           : glm::vec3(0.0f);
   return true;
 }
 

@@ -12,6 +12,7 @@
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/baker/bake_output.h"
+#include "afterglow/baker/reflection_exr.h"
 #include "afterglow/runtime/solver.h"
 #include "path_tracer.h"
 #include "sampling.h"
@@ -93,9 +94,11 @@ Result<std::vector<glm::vec3>> renderPixels(const View& view, const RenderOption
 
 // What the baked render shows at a primary ray's hit: diffuse albedo × lightmap + emission.
 // Back faces of single-sided geometry and misses are black; surfaces without a lightmap
-// (dynamic instances) show only their emission.
+// (dynamic instances) show only their emission. With reflection probes, the diffuse colour and
+// the probes' specular instead (render.h), as reflection_capture.h shades a probe's hits.
 glm::vec3 bakedRadiance(const scenes::Scene& scene, const RayTracer& tracer,
-                        const std::vector<LightmapImage>& lightmaps, const Hit& hit) {
+                        const std::vector<LightmapImage>& lightmaps, const Ray& ray, const Hit& hit,
+                        const runtime::ReflectionLighting* reflections) {
   if (!hit.valid()) return glm::vec3(0.0f);
   const scenes::Instance& inst = scene.instances[hit.instance];
   const int material = scene.meshes[size_t(inst.mesh)].primitives[hit.primitive].material;
@@ -104,11 +107,27 @@ glm::vec3 bakedRadiance(const scenes::Scene& scene, const RayTracer& tracer,
   const glm::vec2 uv0 = tracer.uv(hit, 0);
   glm::vec3 light(0.0f);
   const int atlas = inst.lightmap.atlas;
-  if (atlas >= 0 && size_t(atlas) < lightmaps.size() && lightmaps[size_t(atlas)].width > 0)
-    light = fetch(lightmaps[size_t(atlas)], tracer.uv(hit, 1));
-  glm::vec3 radiance = diffuseAlbedo(scene, material, uv0) * light;
+  const bool lightmapped =
+      atlas >= 0 && size_t(atlas) < lightmaps.size() && lightmaps[size_t(atlas)].width > 0;
+  if (lightmapped) light = fetch(lightmaps[size_t(atlas)], tracer.uv(hit, 1));
+  glm::vec3 radiance(0.0f);
   if (mat.emitsFrom(hit.frontFace)) radiance += emittedRadiance(scene, material, uv0);
-  return radiance;
+  if (!reflections) return radiance + diffuseAlbedo(scene, material, uv0) * light;
+  const SurfaceBrdf brdf = surfaceBrdf(scene, material, uv0);
+  glm::vec3 normal = tracer.shadingNormal(hit);
+  if (!hit.frontFace) normal = -normal;
+  return radiance + brdf.diffuse * light +
+         reflections->specular(ray.origin + hit.t * ray.direction, normal, -ray.direction,
+                               brdf.f0, brdf.roughness, lightmapped ? &light : nullptr);
+}
+
+glm::vec3 jsonVec3(const json& v, bool* ok) {
+  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() ||
+      !v[2].is_number()) {
+    *ok = false;
+    return glm::vec3(0.0f);
+  }
+  return glm::vec3(v[0].get<float>(), v[1].get<float>(), v[2].get<float>());
 }
 
 // Copies report settings[key], a number (count 1) or an array of `count` numbers, into out;
@@ -238,13 +257,78 @@ Result<std::vector<LightmapImage>> loadBakedLightmaps(const std::string& gltfPat
   return images;
 }
 
+Result<BakedReflections> loadBakedReflections(const std::string& gltfPath) {
+  BakedReflections out;
+  const fs::path dir = fs::path(gltfPath).parent_path() / "probes";
+  const std::string path = (dir / "reflection_probes.json").string();
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) return out;
+  Result<std::string> text = readFile(path);
+  if (!text) return text.status();
+  const json doc = json::parse(text.value(), nullptr, false);
+  if (doc.is_discarded() || !doc.is_object() || !doc.contains("probes") ||
+      !doc["probes"].is_array() || doc["probes"].empty())
+    return Status::error(path + ": not a reflection probes file (no \"probes\" array)");
+  const json& probes = doc["probes"];
+  for (size_t i = 0; i < probes.size(); ++i) {
+    const json& p = probes[i];
+    const std::string what = path + ": probes[" + std::to_string(i) + "]";
+    if (!p.is_object() || !p.contains("file") || !p["file"].is_string())
+      return Status::error(what + " has no file");
+    Result<std::vector<runtime::Cubemap>> chain = readCubemapExr((dir / p["file"].get<std::string>()).string());
+    if (!chain) return Status::error(what + ": " + chain.message());
+    out.chains.push_back(std::move(chain.value()));
+    if (i == 0) continue;  // the sky: no box
+    bool ok = p.contains("box") && p["box"].is_object() && p.contains("projectionBox") &&
+              p["projectionBox"].is_object();
+    runtime::ReflectionProbeBox b;
+    if (ok) {
+      const json& box = p["box"];
+      b.centre = jsonVec3(box.value("centre", json()), &ok);
+      b.halfSize = jsonVec3(box.value("halfSize", json()), &ok);
+      const json axes = box.value("axes", json());
+      if (!axes.is_array() || axes.size() != 3) ok = false;
+      for (int a = 0; ok && a < 3; ++a) b.axes[a] = jsonVec3(axes[size_t(a)], &ok);
+      b.projectionCentre = jsonVec3(p["projectionBox"].value("centre", json()), &ok);
+      b.projectionHalfSize = jsonVec3(p["projectionBox"].value("halfSize", json()), &ok);
+      b.capturePosition = jsonVec3(p.value("capturePosition", json()), &ok);
+      const json blend = p.value("blendDistance", json()), importance = p.value("importance", json()),
+                 projection = p.value("boxProjection", json());
+      ok = ok && blend.is_number() && importance.is_number_integer() && projection.is_boolean();
+      if (ok) {
+        b.blendDistance = blend.get<float>();
+        b.importance = importance.get<int>();
+        b.boxProjection = projection.get<bool>();
+      }
+    }
+    if (!ok)
+      return Status::error(what + ": a box, projectionBox, capturePosition, blendDistance, "
+                           "importance or boxProjection is missing or malformed");
+    out.boxes.push_back(b);
+  }
+  const std::string dfgPath = (dir / "dfg.exr").string();
+  Result<LightmapImage> dfg = readLinearImage(dfgPath);
+  if (!dfg) return dfg.status();
+  if (dfg->width != runtime::kDfgSize || dfg->height != runtime::kDfgSize)
+    return Status::error(dfgPath + format(": %dx%d, the DFG table is %dx%d", dfg->width,
+                                          dfg->height, runtime::kDfgSize, runtime::kDfgSize));
+  for (const glm::vec3& v : dfg->pixels) out.dfg.emplace_back(v.x, v.y);
+  return out;
+}
+
 Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const RayTracer& tracer,
                                            const std::vector<LightmapImage>& lightmaps,
                                            const View& view, const RenderOptions& options,
                                            Progress& progress,
-                                           const std::vector<ProbeSphere>& spheres) {
+                                           const std::vector<ProbeSphere>& spheres,
+                                           const BakedReflections* reflections) {
   const int spa = std::max(1, options.samplesPerAxis);
-  const ProbeSphereIndex sphereIndex(spheres, view, options.width, options.height);
+  const bool reflecting = reflections && !reflections->empty();
+  const runtime::ReflectionLighting probes = reflecting ? reflections->lighting()
+                                                        : runtime::ReflectionLighting();
+  const runtime::ReflectionLighting* lighting = reflecting ? &probes : nullptr;
+  ProbeSphereIndex sphereIndex(spheres, view, options.width, options.height);
+  sphereIndex.setReflections(lighting);
   return renderPixels(view, options, "render", progress,
                       [&](const PinholeCamera& camera, int px, int py) {
     // A fixed grid: the picture of a bake has no noise of its own.
@@ -258,7 +342,7 @@ Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const Ray
         if (!sphereIndex.empty() && sphereIndex.shade(ray, px, py, hit.t, &sphere))
           sum += sphere;
         else
-          sum += bakedRadiance(scene, tracer, lightmaps, hit);
+          sum += bakedRadiance(scene, tracer, lightmaps, ray, hit, lighting);
       }
     return sum / float(spa * spa);
   });

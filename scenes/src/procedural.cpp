@@ -200,6 +200,45 @@ Scene makeCornellBox() {
   return scene;
 }
 
+Scene makeCornellMetalBox() {
+  Scene scene = makeCornellBox();
+  // The blocks become metals: a mirror (silver, roughness 0.02) and brushed copper (0.3).
+  Material mirror = diffuse("mirror", {0.95f, 0.95f, 0.95f});
+  mirror.metallicFactor = 1.0f;
+  mirror.roughnessFactor = 0.02f;
+  Material copper = diffuse("copper", {0.95f, 0.64f, 0.54f});
+  copper.metallicFactor = 1.0f;
+  copper.roughnessFactor = 0.3f;
+  const int kMirror = int(scene.materials.size()), kCopper = kMirror + 1;
+  scene.materials.push_back(mirror);
+  scene.materials.push_back(copper);
+  for (Instance& inst : scene.instances) {
+    Primitive& prim = scene.meshes[size_t(inst.mesh)].primitives[0];
+    if (inst.name == "tall_block") prim.material = kMirror;
+    if (inst.name == "short_block") prim.material = kCopper;
+  }
+  // The open side closed by a white wall, so that every reflection shows the room.
+  const glm::vec3 roomCentre = mm({278.0f, 274.4f, 279.6f});
+  Primitive front;
+  front.material = 0;  // white
+  const Quad q = quadMm({0.0f, 0.0f, 0.0f}, {556.0f, 0.0f, 0.0f}, {556.0f, 548.8f, 0.0f},
+                        {0.0f, 548.8f, 0.0f});
+  addQuad(front, q, roomCentre - quadCentre(q));
+  addMeshInstance(scene, "front_wall", std::move(front));
+  // One reflection probe filling the room, and the camera moved inside, by the front wall.
+  ReflectionProbe probe;
+  probe.name = "room_probe";
+  probe.transform[3] = glm::vec4(roomCentre, 1.0f);
+  probe.size = mm({556.0f, 548.8f, 559.2f});
+  probe.blendDistance = 0.1f;
+  scene.reflectionProbes.push_back(probe);
+  Camera& camera = scene.cameras.front();
+  camera.transform[3] = glm::vec4(mm({278.0f, 273.0f, 20.0f}), 1.0f);
+  camera.yfov = 1.2f;
+  camera.aspectRatio = 0.0f;
+  return scene;
+}
+
 Scene makeFurnaceBox(const FurnaceOptions& options) {
   AG_CHECK(options.size > 0.0f, "furnace box size must be positive");
   AG_CHECK(options.subdivisions >= 1, "furnace box needs at least one quad per edge");

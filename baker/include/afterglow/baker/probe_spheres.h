@@ -36,6 +36,7 @@
 #include "afterglow/core/status.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
+#include "afterglow/runtime/reflection_capture.h"
 
 namespace afterglow::baker {
 
@@ -45,11 +46,20 @@ struct View;
 
 constexpr float kProbeSphereAlbedo = 0.8f;
 
+// What a sphere is made of. With reflection probes (render.h), the spheres cycle through the
+// three: a white diffuse one (the light probes alone), a mirror and a rough metal (the
+// reflection probes blended at the hit, normalised by the light probes' irradiance there as
+// engines light a dynamic object's reflections).
+enum class SphereFinish { Diffuse, Mirror, RoughMetal };
+constexpr glm::vec3 kMetalSphereF0{0.95f, 0.93f, 0.88f};  // silver's specular colour
+constexpr float kRoughMetalRoughness = 0.4f;
+
 struct ProbeSphere {
   glm::vec3 centre{0.0f};
   float radius = 0.0f;
   int probe = -1;     // the probe it stands at
   runtime::ShL2 sh;   // the probes' radiance SH interpolated at the centre
+  SphereFinish finish = SphereFinish::Diffuse;
 };
 
 // The light probes as a bake writes them: positions and tetrahedra (light_probes.json) and one
@@ -84,8 +94,12 @@ class ProbeSphereIndex {
   // hit before `tMax` (the scene's hit, a distance), in *radiance; false otherwise. Spheres
   // holding the ray's origin are seen through (a camera inside a sphere sees the scene).
   bool shade(const Ray& ray, int px, int py, float tMax, glm::vec3* radiance) const;
+  // The reflection probes that light mirror and metal spheres (null: they are black, as an
+  // engine without reflection probes shows a metal).
+  void setReflections(const runtime::ReflectionLighting* reflections) { reflections_ = reflections; }
 
  private:
+  const runtime::ReflectionLighting* reflections_ = nullptr;
   static constexpr int kTile = 16;  // pixels
   std::vector<ProbeSphere> spheres_;
   int tilesX_ = 0, tilesY_ = 0;

@@ -1,7 +1,11 @@
 // `afterglow render`: a ray-traced picture of a baked scene, so a person can see the bake. Each
 // pixel traces primary rays (a fixed 2×2 grid, deterministic) and shades the first hit with
 // diffuse albedo × lightmap (bilinear at TEXCOORD_1) + emission; misses and dynamic instances
-// (no lightmap) get no light. The output is linear HDR; tone mapping happens on write.
+// (no lightmap) get no light. When the bake has reflection probes, surfaces are shaded as an
+// engine shades them instead: the metallic-roughness BRDF's diffuse colour × lightmap +
+// emission + specular from the probes (runtime::ReflectionLighting: blended, box-projected,
+// prefiltered, the DFG table), so metal and gloss show. The output is linear HDR; tone mapping
+// happens on write.
 // `afterglow render --reference` path-traces the same view, shaded the same way but with the
 // lightmap replaced by a path-traced E/π at each first hit, to compare against the bake.
 #pragma once
@@ -15,6 +19,8 @@
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
+#include "afterglow/runtime/reflection_capture.h"
+#include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/scenes/scene.h"
 
 namespace afterglow::baker {
@@ -64,6 +70,20 @@ Result<LightmapImage> readLinearImage(const std::string& path);
 // extras.afterglow.exr), indexed by atlas. Errors name the file.
 Result<std::vector<LightmapImage>> loadBakedLightmaps(const std::string& gltfPath);
 
+// The reflection probes a bake wrote beside its glTF (OUT/probes/reflection_probes.json, the
+// cube EXRs and dfg.exr it names), read back as an engine would: probe 0 the sky. Empty (no
+// file) for a bake without reflection probes. Errors name the file at fault.
+struct BakedReflections {
+  std::vector<runtime::ReflectionProbeBox> boxes;  // probe i + 1's
+  std::vector<runtime::CubemapChain> chains;       // [0] the sky, [i + 1] boxes[i]
+  std::vector<glm::vec2> dfg;                      // kDfgSize² (scale, bias)
+  bool empty() const { return chains.empty(); }
+  runtime::ReflectionLighting lighting() const {
+    return {&boxes, &chains, &dfg, runtime::kDfgSize};
+  }
+};
+Result<BakedReflections> loadBakedReflections(const std::string& gltfPath);
+
 // Renders the scene; returns width*height linear RGB, row 0 at the top of the picture. With
 // `spheres` (probe_spheres.h), each is drawn lit by its probes, in front of or behind the scene
 // as it lies, without shadows on the scene.
@@ -71,7 +91,8 @@ Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const Ray
                                            const std::vector<LightmapImage>& lightmaps,
                                            const View& view, const RenderOptions& options = {},
                                            Progress& progress = nullProgress(),
-                                           const std::vector<ProbeSphere>& spheres = {});
+                                           const std::vector<ProbeSphere>& spheres = {},
+                                           const BakedReflections* reflections = nullptr);
 
 // The same view path-traced (reference.h): every pixel averages `samplesPerPixel` camera rays
 // through stratified jittered points of the pixel, each shaded as a bake is rendered (emission +

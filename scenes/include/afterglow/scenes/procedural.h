@@ -16,6 +16,12 @@ namespace afterglow::scenes {
 // "light"); camera "Camera" at (0.278, 0.273, -0.8) looking along +Z, yfov 0.686 rad.
 Scene makeCornellBox();
 
+// The Cornell box with metal, for reflection probes: the tall block a mirror (silver, roughness
+// 0.02), the short one brushed copper (roughness 0.3), the open side closed by a white
+// "front_wall", one reflection probe ("room_probe") filling the room with a 0.1 m blend, and the
+// camera inside by the front wall (yfov 1.2 rad).
+Scene makeCornellMetalBox();
+
 struct FurnaceOptions {
   float size = 1.0f;                  // edge length of the cube, metres
   glm::vec3 albedo{0.5f};             // every surface's base colour (metallic 0, roughness 1)
