@@ -1,0 +1,121 @@
+// afterglow_bench reflection [SCENE] [--texels-per-unit 4] [--threads 2] [--probes 4]
+// [--resolution 128] [--repeat 10]: the reflection probes' figures issue 15 asks for, on
+// Sponza-sun at 4 texels per metre by default, with `--probes` probes of `--resolution`² along
+// the level's long axis at a fifth of its height, their boxes fitted:
+//   - the capture (ray tracing and hit records) per probe (target <= 0.2 s);
+//   - the runtime's update of one probe on one thread: one capture pass (re-shading every
+//     texel from the lightmaps and the previous pass's probes) and its GGX prefilter
+//     (target <= 20 ms for 128²);
+//   - the probes' share of the transport.
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "afterglow/baker/bake.h"
+#include "afterglow/core/parallel.h"
+#include "afterglow/runtime/reflection_prefilter.h"
+#include "afterglow/runtime/runtime.h"
+#include "afterglow/runtime/transport_file.h"
+#include "afterglow/uv/unwrap.h"
+#include "bench_common.h"
+
+namespace afterglow::bench {
+
+int benchReflection(int argc, char** argv) {
+  std::string path = std::string(AFTERGLOW_SHARED_DIR) + "/scenes/sponza/Sponza-sun.gltf";
+  float texelsPerUnit = 4.0f;
+  int threads = 2, repeat = 10, probeCount = 4, resolution = 128;
+  for (int i = 2; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto next = [&]() { return i + 1 < argc ? std::atof(argv[++i]) : 0.0; };
+    if (arg == "--texels-per-unit") texelsPerUnit = float(next());
+    else if (arg == "--threads") threads = int(next());
+    else if (arg == "--repeat") repeat = std::max(1, int(next()));
+    else if (arg == "--probes") probeCount = std::max(1, int(next()));
+    else if (arg == "--resolution") resolution = int(next());
+    else if (!arg.empty() && arg[0] != '-') path = arg;
+    else
+      return fail("unknown option " + arg +
+                  " (--texels-per-unit N, --threads N, --repeat N, --probes N, --resolution N)");
+  }
+  setThreadCount(threads);
+  Result<scenes::Scene> loaded = loadBenchScene(path);
+  if (!loaded) return fail(loaded.message());
+  scenes::Scene scene = std::move(loaded.value());
+  uv::UnwrapOptions unwrap;
+  unwrap.pack.texelsPerUnit = texelsPerUnit;
+  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
+  if (!unwrapped) return fail(unwrapped.message());
+  const scenes::Bounds bounds = scene.bounds();
+  const glm::vec3 size = bounds.size();
+  const int longAxis = size.x >= size.z ? 0 : 2;
+  for (int k = 0; k < probeCount; ++k) {
+    glm::vec3 p = bounds.min + size * glm::vec3(0.5f, 0.2f, 0.5f);
+    p[longAxis] = bounds.min[longAxis] + size[longAxis] * (float(k) + 0.5f) / float(probeCount);
+    scenes::ReflectionProbe probe;
+    probe.name = "bench" + std::to_string(k);
+    probe.transform[3] = glm::vec4(p, 1.0f);
+    probe.resolution = resolution;
+    scene.reflectionProbes.push_back(probe);
+  }
+
+  baker::BakeOptions options;  // no light probes: the figures are the reflection probes'
+  const auto t0 = Clock::now();
+  Result<baker::BakeResult> baked = baker::bake(scene, options);
+  const double bakeSeconds = secondsSince(t0);
+  if (!baked) return fail(baked.message());
+  const baker::BakeResult& b = baked.value();
+  double captureSeconds = 0.0, passSeconds = 0.0;
+  for (const baker::StageTime& s : b.stages) {
+    if (s.name == "reflection capture") captureSeconds = s.seconds;
+    if (s.name == "reflection passes") passSeconds = s.seconds;
+  }
+  const runtime::TransportData& data = b.transport;
+  const size_t fileBytes = runtime::serializeTransport(data).size();
+  const size_t reflectionBytes = data.reflectionBytes();
+
+  // The runtime on one thread: one unit (a capture pass and its prefilter) at a time, and the
+  // two halves apart.
+  std::string error;
+  std::unique_ptr<runtime::Runtime> rt = runtime::Runtime::fromData(data, &error);
+  if (!rt) return fail(error);
+  rt->update();
+  double unitMs = 1e30;
+  for (int r = 0; r < repeat; ++r)
+    unitMs = std::min(unitMs, rt->updateReflectionProbes(1).reflectionMilliseconds);
+  std::vector<std::vector<glm::vec3>> atlases(size_t(rt->atlasCount()));
+  for (int a = 0; a < rt->atlasCount(); ++a) rt->readAtlas(a, atlases[size_t(a)]);
+  std::vector<runtime::CubemapChain> chains;
+  for (int p = 0; p < rt->reflectionProbeCount(); ++p) chains.push_back(rt->reflectionChain(p));
+  const std::vector<runtime::ReflectionProbeBox> boxes = data.reflections.boxes();
+  const runtime::ReflectionLighting lighting{&boxes, &chains, &rt->dfgTable(), runtime::kDfgSize};
+  double shadeMs = 1e30, prefilterMs = 1e30;
+  for (int r = 0; r < repeat; ++r) {
+    auto s0 = Clock::now();
+    const runtime::Cubemap cube = runtime::shadeReflectionCapture(rt->data(), 0, atlases, &lighting);
+    shadeMs = std::min(shadeMs, 1e3 * secondsSince(s0));
+    s0 = Clock::now();
+    const runtime::CubemapChain chain = runtime::reflectionChain(cube);
+    prefilterMs = std::min(prefilterMs, 1e3 * secondsSince(s0));
+  }
+
+  std::printf("reflection probes  %s at %.3g texels/m, %d probes of %d², %d threads for the "
+              "bake, 1 for the runtime\n",
+              path.c_str(), double(texelsPerUnit), probeCount, resolution, threads);
+  const double capturePer = captureSeconds / double(probeCount);
+  std::printf("  capture      %.3f s per probe (%.2f s for %d, of a %.1f s bake; the bake's "
+              "passes %.2f s)   target <= 0.2 s: %s\n",
+              capturePer, captureSeconds, probeCount, bakeSeconds, passSeconds,
+              mark(capturePer <= 0.2));
+  std::printf("  runtime      one probe's update %.2f ms (capture pass %.2f ms + prefilter %.2f "
+              "ms)   target <= 20 ms: %s\n",
+              unitMs, shadeMs, prefilterMs, mark(unitMs <= 20.0));
+  std::printf("  transport    reflection probes %.2f MB of %.2f MB (%.1f%%), %.2f MB per probe\n",
+              double(reflectionBytes) / 1e6, double(fileBytes) / 1e6,
+              100.0 * double(reflectionBytes) / double(fileBytes),
+              double(reflectionBytes) / 1e6 / double(probeCount));
+  return 0;
+}
+
+}  // namespace afterglow::bench
