@@ -206,6 +206,8 @@ TEST(ReflectionBake, RelitCubemapsEqualAFreshBake) {
   for (int k = 0; k < 6; ++k) EXPECT_EQ(rt->updateReflectionProbes(1).reflectionPasses, 1);
   const runtime::CubemapChain again = rt->reflectionChain(2);
   EXPECT_EQ(again[0].texels, fresh.reflectionChains[2][0].texels);
+  // A budget smaller than one unit still runs one, and no more.
+  EXPECT_EQ(rt->updateReflectionProbes(-1, 1e-6).reflectionPasses, 1);
 }
 
 // McGuire's Cornell box: a probe's mirror mip against the reference path tracer's radiance

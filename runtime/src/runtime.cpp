@@ -343,7 +343,7 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
     stats.probeMilliseconds = msSince(probeStart);
   }
   if (dirty & kDirtySky) reflectionSkyStale_ = true;
-  runReflectionUnits(options.reflectionPasses, stats);
+  runReflectionUnits(options.reflectionPasses, options.timeBudgetMs, start, stats);
   stats.milliseconds = msSince(start);
   return stats;
 }

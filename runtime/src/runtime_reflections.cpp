@@ -11,18 +11,17 @@ namespace afterglow::runtime {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+double msSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
 }  // namespace
 
-void Runtime::runReflectionUnits(int passes, UpdateStats& stats) {
+void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point callStart,
+                                 UpdateStats& stats) {
   const size_t probes = data_.reflections.count();
   if (probes == 0 || passes == 0) return;
-  const Clock::time_point start = Clock::now();
+  const auto start = std::chrono::steady_clock::now();
   if (reflectionPasses_.empty()) {
     reflectionPasses_.assign(size_t(data_.reflections.bounces) + 1, std::vector<CubemapChain>(probes));
     reflectionBoxes_ = data_.reflections.boxes();
@@ -42,7 +41,13 @@ void Runtime::runReflectionUnits(int passes, UpdateStats& stats) {
   size_t previousPass = ~size_t(0);
   const std::vector<std::vector<glm::vec3>>& atlases = images_[front_];
   std::vector<uint8_t> published(probes, 0);
+  double lastUnitMs = 0.0;
   for (; todo > 0; --todo) {
+    // The call's budget: stop before a unit that would overrun it (the first always runs).
+    if (budgetMs > 0.0 && stats.reflectionPasses > 0 &&
+        msSince(callStart) + lastUnitMs > budgetMs)
+      break;
+    const auto unitStart = std::chrono::steady_clock::now();
     const size_t pass = reflectionCursor_ / probes, probe = reflectionCursor_ % probes;
     const ReflectionLighting* lighting = nullptr;
     ReflectionLighting light;
@@ -61,6 +66,7 @@ void Runtime::runReflectionUnits(int passes, UpdateStats& stats) {
     if (pass + 1 == reflectionPasses_.size()) published[probe] = 1;
     reflectionCursor_ = (reflectionCursor_ + 1) % units;
     ++stats.reflectionPasses;
+    lastUnitMs = msSince(unitStart);
   }
   // Publish the probes whose last pass ran (and the sky when it changed).
   std::vector<std::shared_ptr<const CubemapChain>> fresh(probes + 1);
@@ -75,11 +81,11 @@ void Runtime::runReflectionUnits(int passes, UpdateStats& stats) {
   stats.reflectionMilliseconds += msSince(start);
 }
 
-UpdateStats Runtime::updateReflectionProbes(int passes) {
+UpdateStats Runtime::updateReflectionProbes(int passes, double budgetMs) {
   std::lock_guard<std::mutex> updateLock(updateMutex_);
-  const Clock::time_point start = Clock::now();
+  const auto start = std::chrono::steady_clock::now();
   UpdateStats stats;
-  runReflectionUnits(passes, stats);
+  runReflectionUnits(passes, budgetMs, start, stats);
   stats.milliseconds = msSince(start);
   return stats;
 }

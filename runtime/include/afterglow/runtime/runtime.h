@@ -35,6 +35,7 @@
 // loop takes a std::function); the test UpdateDoesNotAllocate tracks that.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -80,7 +81,9 @@ struct UpdateOptions {
   //   0    none: the cubemaps keep their last values
   //   n    at most n units, carrying on where the previous call stopped (an engine spreads a
   //        round over frames: one unit a frame is one 128² probe's capture and prefilter)
-  // The sky's cubemap (probe 0) is recomputed when the sky changed, before the units.
+  // The sky's cubemap (probe 0) is recomputed when the sky changed, before the units. With a
+  // timeBudgetMs, the units stop before one that would overrun the whole call's budget (the
+  // first always runs, when any is asked for).
   int reflectionPasses = -1;
 };
 
@@ -233,8 +236,9 @@ class Runtime {
   // (reflection_prefilter.h's layout); empty without reflection probes.
   const std::vector<glm::vec2>& dfgTable() const { return dfg_; }
   // Runs reflection units alone (as UpdateOptions::reflectionPasses, with < 0 a full round)
-  // from the current lightmaps and settings, and publishes them. Serialised with update().
-  UpdateStats updateReflectionProbes(int passes = -1);
+  // from the current lightmaps and settings, and publishes them; budgetMs > 0 stops before a
+  // unit that would overrun it (the first always runs). Serialised with update().
+  UpdateStats updateReflectionProbes(int passes = -1, double budgetMs = 0.0);
 
   // The transport, with the settings as of the last update() applied. Only while no update()
   // runs.
@@ -311,8 +315,11 @@ class Runtime {
   std::vector<ReflectionProbeBox> reflectionBoxes_;
   std::vector<glm::vec2> dfg_;
   std::vector<std::shared_ptr<const CubemapChain>> reflectionOut_;
-  // Runs reflection units (as UpdateOptions::reflectionPasses) and publishes; fills stats.
-  void runReflectionUnits(int passes, UpdateStats& stats);
+  // Runs reflection units (as UpdateOptions::reflectionPasses) and publishes; fills stats. A
+  // budget > 0 (ms since callStart) stops before a unit that would overrun it.
+  using Clock = std::chrono::steady_clock;
+  void runReflectionUnits(int passes, double budgetMs, Clock::time_point callStart,
+                          UpdateStats& stats);
   std::shared_ptr<const CubemapChain> publishedChain(int probe) const;
 };
 
