@@ -36,5 +36,6 @@ int benchBake(int argc, char** argv);
 int benchRuntime(int argc, char** argv);
 int benchViews(int argc, char** argv);
 int benchProbes(int argc, char** argv);
+int benchReflection(int argc, char** argv);
 
 }  // namespace afterglow::bench

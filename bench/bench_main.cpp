@@ -6,6 +6,7 @@
 //   afterglow_bench accuracy [SCENE] [--texels-per-unit N] [--spp N] [--stride N] ...
 //   afterglow_bench views SCENE A.exr B.exr [--look-from X,Y,Z --look-at X,Y,Z --fov DEG]
 //   afterglow_bench probes [SCENE] [--texels-per-unit 4] [--threads 2] [--repeat 5]
+//   afterglow_bench reflection [--repeat 10] [--sampled]
 #include <cstdio>
 #include <cstring>
 
@@ -20,13 +21,15 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "runtime") == 0) return benchRuntime(argc, argv);
   if (std::strcmp(command, "views") == 0) return benchViews(argc, argv);
   if (std::strcmp(command, "probes") == 0) return benchProbes(argc, argv);
+  if (std::strcmp(command, "reflection") == 0) return benchReflection(argc, argv);
   std::fprintf(stderr,
-               "usage: afterglow_bench uv|bake|runtime|accuracy|views|probes [options]\n"
+               "usage: afterglow_bench uv|bake|runtime|accuracy|views|probes|reflection [options]\n"
                "  uv        lightmap UVs of Sponza: utilisation, stretch, time (issue 2)\n"
                "  bake      bake time, accuracy, ray throughput, memory (issue 3)\n"
                "  runtime   transport size and load, bounce and update times, one thread (issue 4)\n"
                "  accuracy  a bake against the reference path tracer (Cornell box)\n"
                "  views     two linear pictures of one view (afterglow, Cycles) per material\n"
-               "  probes    light probes: placement, precompute share, refresh time, bytes (issue 14)\n");
+               "  probes    light probes: placement, precompute share, refresh time, bytes (issue 14)\n"
+               "  reflection  reflection probes: the GGX prefilter chain per update, one thread (issue 15)\n");
   return 2;
 }
