@@ -6,7 +6,8 @@
 //   afterglow_bench accuracy [SCENE] [--texels-per-unit N] [--spp N] [--stride N] ...
 //   afterglow_bench views SCENE A.exr B.exr [--look-from X,Y,Z --look-at X,Y,Z --fov DEG]
 //   afterglow_bench probes [SCENE] [--texels-per-unit 4] [--threads 2] [--repeat 5]
-//   afterglow_bench reflection [SCENE] [--texels-per-unit 4] [--threads 2] [--probes 4] [--resolution 128] [--repeat 10]
+//   afterglow_bench reflection [SCENE] [--texels-per-unit 4] [--threads 2] [--probes 4]
+//       [--resolution 128] [--repeat 10] [--sampled] [--prefilter-only]
 #include <cstdio>
 #include <cstring>
 
@@ -30,6 +31,6 @@ int main(int argc, char** argv) {
                "  accuracy  a bake against the reference path tracer (Cornell box)\n"
                "  views     two linear pictures of one view (afterglow, Cycles) per material\n"
                "  probes    light probes: placement, precompute share, refresh time, bytes (issue 14)\n"
-               "  reflection  reflection probes: capture, runtime update, transport share (issue 15)\n");
+               "  reflection  reflection probes: prefilter, capture, runtime update, transport share (issue 15)\n");
   return 2;
 }

@@ -1,5 +1,4 @@
-// afterglow_bench reflection [SCENE] [--texels-per-unit 4] [--threads 2] [--probes 4]
-// [--resolution 128] [--repeat 10]: the reflection probes' figures issue 15 asks for, on
+// afterglow_bench reflection's figures of a bake (bench_reflection.cpp reads the options): on
 // Sponza-sun at 4 texels per metre by default, with `--probes` probes of `--resolution`² along
 // the level's long axis at a fifth of its height, their boxes fitted:
 //   - the capture (ray tracing and hit records) per probe (target <= 0.2 s);
@@ -22,23 +21,8 @@
 
 namespace afterglow::bench {
 
-int benchReflection(int argc, char** argv) {
-  std::string path = std::string(AFTERGLOW_SHARED_DIR) + "/scenes/sponza/Sponza-sun.gltf";
-  float texelsPerUnit = 4.0f;
-  int threads = 2, repeat = 10, probeCount = 4, resolution = 128;
-  for (int i = 2; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto next = [&]() { return i + 1 < argc ? std::atof(argv[++i]) : 0.0; };
-    if (arg == "--texels-per-unit") texelsPerUnit = float(next());
-    else if (arg == "--threads") threads = int(next());
-    else if (arg == "--repeat") repeat = std::max(1, int(next()));
-    else if (arg == "--probes") probeCount = std::max(1, int(next()));
-    else if (arg == "--resolution") resolution = int(next());
-    else if (!arg.empty() && arg[0] != '-') path = arg;
-    else
-      return fail("unknown option " + arg +
-                  " (--texels-per-unit N, --threads N, --repeat N, --probes N, --resolution N)");
-  }
+int reflectionBakeFigures(const std::string& path, float texelsPerUnit, int threads, int repeat,
+                          int probeCount, int resolution) {
   setThreadCount(threads);
   Result<scenes::Scene> loaded = loadBenchScene(path);
   if (!loaded) return fail(loaded.message());

@@ -38,6 +38,25 @@ glm::vec3 sampleFaceClamped(const Cubemap& cube, const CubeFaceUv& p) {
   return glm::mix(top, bottom, wy);
 }
 
+// sampleFaceClamped's texels and weights, each scaled by `scale`, appended at taps[count].
+int faceClampedTaps(int n, const CubeFaceUv& p, float scale, CubemapTap* taps, int count) {
+  const float fx = std::clamp(p.u * float(n) - 0.5f, 0.0f, float(n - 1));
+  const float fy = std::clamp(p.v * float(n) - 0.5f, 0.0f, float(n - 1));
+  const int x0 = std::min(int(fx), n - 1);
+  const int y0 = std::min(int(fy), n - 1);
+  const int x1 = std::min(x0 + 1, n - 1);
+  const int y1 = std::min(y0 + 1, n - 1);
+  const float wx = fx - float(x0);
+  const float wy = fy - float(y0);
+  const uint32_t row0 = uint32_t((p.face * n + y0) * n);
+  const uint32_t row1 = uint32_t((p.face * n + y1) * n);
+  taps[count++] = {row0 + uint32_t(x0), scale * (1.0f - wx) * (1.0f - wy)};
+  taps[count++] = {row0 + uint32_t(x1), scale * wx * (1.0f - wy)};
+  taps[count++] = {row1 + uint32_t(x0), scale * (1.0f - wx) * wy};
+  taps[count++] = {row1 + uint32_t(x1), scale * wx * wy};
+  return count;
+}
+
 }  // namespace
 
 Cubemap makeCubemap(int size, glm::vec3 value) {
@@ -133,6 +152,36 @@ glm::vec3 sampleCubemap(const Cubemap& cube, glm::vec3 dir) {
   const glm::vec3 top = glm::mix(fetch(x0, y0), fetch(x0 + 1, y0), wx);
   const glm::vec3 bottom = glm::mix(fetch(x0, y0 + 1), fetch(x0 + 1, y0 + 1), wx);
   return glm::mix(top, bottom, wy);
+}
+
+int cubemapBilinearTaps(int size, glm::vec3 dir, CubemapTap* taps) {
+  if (size <= 0) return 0;
+  // sampleCubemap step by step, recording texels instead of reading them.
+  const int n = size;
+  const CubeFaceUv p = cubemapFaceUv(dir);
+  const float fx = p.u * float(n) - 0.5f;
+  const float fy = p.v * float(n) - 0.5f;
+  const int x0 = int(std::floor(fx));
+  const int y0 = int(std::floor(fy));
+  const float wx = fx - float(x0);
+  const float wy = fy - float(y0);
+  const float inv = 1.0f / float(n);
+  int count = 0;
+  auto corner = [&](int x, int y, float weight) {
+    if (weight == 0.0f) return;
+    if (x >= 0 && x < n && y >= 0 && y < n) {
+      taps[count++] = {uint32_t((p.face * n + y) * n + x), weight};
+      return;
+    }
+    const glm::vec3 d = facePlanePoint(p.face, 2.0f * (float(x) + 0.5f) * inv - 1.0f,
+                                       2.0f * (float(y) + 0.5f) * inv - 1.0f);
+    count = faceClampedTaps(n, cubemapFaceUv(d), weight, taps, count);
+  };
+  corner(x0, y0, (1.0f - wx) * (1.0f - wy));
+  corner(x0 + 1, y0, wx * (1.0f - wy));
+  corner(x0, y0 + 1, (1.0f - wx) * wy);
+  corner(x0 + 1, y0 + 1, wx * wy);
+  return count;
 }
 
 }  // namespace afterglow::runtime

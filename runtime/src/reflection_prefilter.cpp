@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
+
+#include "afterglow/runtime/prefilter_plan.h"
 
 namespace afterglow::runtime {
 
@@ -238,6 +241,11 @@ Cubemap prefilterGgx(const Cubemap& source, float perceptualRoughness, int outSi
 std::vector<Cubemap> prefilterChain(const Cubemap& source, int mipCount, int samples) {
   std::vector<Cubemap> out;
   if (source.size <= 0 || mipCount <= 0) return out;
+  if (samples <= 0) {
+    const std::shared_ptr<const PrefilterPlan> plan = sharedPrefilterPlan(source.size, mipCount);
+    if (plan) return plan->prefilter(source);
+    samples = kPrefilterSamples;
+  }
   const std::vector<Cubemap> chain = mipChain(source);
   out.reserve(size_t(mipCount));
   for (int m = 0; m < mipCount; ++m)

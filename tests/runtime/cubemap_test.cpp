@@ -253,5 +253,45 @@ TEST(Cubemap, BilinearIsSeamlessAcrossFaceEdges) {
   EXPECT_LT(worstCorner, 4e-3f);
 }
 
+// The taps are sampleCubemap's arithmetic: a random cube read through them matches the lookup,
+// everywhere including the face edges and corners, whose corners read a neighbouring face.
+TEST(Cubemap, BilinearTapsAreTheLookup) {
+  test::Rng rng{11};
+  for (int size : {1, 2, 7, 16}) {
+    Cubemap cube = makeCubemap(size);
+    for (glm::vec3& t : cube.texels) t = glm::vec3(rng.unit(), rng.unit(), 10.0f * rng.unit());
+    float worst = 0.0f;
+    int most = 0;
+    for (int i = 0; i < 20000; ++i) {
+      // Half the directions on face edges and corners, where the taps leave the face.
+      glm::vec3 d = randomDirection(rng);
+      const glm::vec3 m = glm::abs(d);
+      const int major = m.x >= m.y && m.x >= m.z ? 0 : m.y >= m.z ? 1 : 2;
+      const int other = (major + 1 + int(rng.below(2))) % 3;
+      if (i % 2) d[other] = std::copysign(m[major], d[other]);  // on an edge
+      if (i % 4 == 1) d = glm::vec3(std::copysign(1.0f, d.x), std::copysign(1.0f, d.y),
+                                    std::copysign(1.0f, d.z));  // a corner
+      CubemapTap taps[kMaxCubemapTaps];
+      const int count = cubemapBilinearTaps(size, d, taps);
+      ASSERT_GT(count, 0);
+      ASSERT_LE(count, kMaxCubemapTaps);
+      most = std::max(most, count);
+      glm::vec3 sum(0.0f);
+      float weight = 0.0f;
+      for (int k = 0; k < count; ++k) {
+        ASSERT_LT(taps[k].index, cube.texels.size());
+        EXPECT_GE(taps[k].weight, 0.0f);
+        sum += taps[k].weight * cube.texels[taps[k].index];
+        weight += taps[k].weight;
+      }
+      EXPECT_NEAR(weight, 1.0f, 1e-5f);
+      worst = std::max(worst, glm::length(sum - sampleCubemap(cube, d)));
+    }
+    EXPECT_LT(worst, 1e-5f) << "size " << size;
+    EXPECT_GT(most, 4) << "size " << size;  // some lookups did read across an edge
+  }
+  EXPECT_EQ(cubemapBilinearTaps(0, glm::vec3(1.0f, 0.0f, 0.0f), nullptr), 0);
+}
+
 }  // namespace
 }  // namespace afterglow::runtime

@@ -38,6 +38,7 @@
 // going to X before Y before Z (OpenEXR's faceAndPixelPosition).
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -109,5 +110,20 @@ float cubemapTexelSolidAngle(int x, int y, int size);
 // cube corner, where only three faces meet, the missing fourth value comes from one of the
 // neighbours' edge texels.
 glm::vec3 sampleCubemap(const Cubemap& cube, glm::vec3 dir);
+
+// One texel's share of a filtered lookup: texels[index] (the layout above) times weight.
+struct CubemapTap {
+  uint32_t index = 0;
+  float weight = 0.0f;
+};
+// At most this many taps per lookup: four texel centres, each beyond the face a bilinear
+// read of the neighbouring face.
+constexpr int kMaxCubemapTaps = 16;
+
+// sampleCubemap as a linear operator: the texels it blends for dir on a cube of `size` and
+// their weights (≥ 0, summing to 1; an index may repeat), so that sampleCubemap(cube, dir) =
+// Σ taps[i].weight · cube.texels[taps[i].index]. Writes up to kMaxCubemapTaps taps and returns
+// how many; 0 for size ≤ 0. (The prefilter's plan records these once instead of sampling.)
+int cubemapBilinearTaps(int size, glm::vec3 dir, CubemapTap* taps);
 
 }  // namespace afterglow::runtime
