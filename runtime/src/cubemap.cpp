@@ -154,6 +154,47 @@ glm::vec3 sampleCubemap(const Cubemap& cube, glm::vec3 dir) {
   return glm::mix(top, bottom, wy);
 }
 
+BorderedCubemap withBorder(const Cubemap& cube) {
+  BorderedCubemap out;
+  out.size = cube.size;
+  if (cube.size <= 0) return out;
+  const int n = cube.size, m = n + 2;
+  const float inv = 1.0f / float(n);
+  out.texels.resize(size_t(kCubeFaceCount) * size_t(m) * size_t(m));
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = -1; y <= n; ++y)
+      for (int x = -1; x <= n; ++x) {
+        glm::vec3 v;
+        if (x >= 0 && x < n && y >= 0 && y < n) {
+          v = cube.at(face, x, y);
+        } else {
+          // sampleCubemap's fetch beyond the face, exactly.
+          const glm::vec3 d = facePlanePoint(face, 2.0f * (float(x) + 0.5f) * inv - 1.0f,
+                                             2.0f * (float(y) + 0.5f) * inv - 1.0f);
+          v = sampleFaceClamped(cube, cubemapFaceUv(d));
+        }
+        out.texels[(size_t(face) * size_t(m) + size_t(y + 1)) * size_t(m) + size_t(x + 1)] = v;
+      }
+  return out;
+}
+
+glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, glm::vec3 dir) {
+  if (cube.size <= 0) return glm::vec3(0.0f);
+  const int n = cube.size, m = n + 2;
+  const CubeFaceUv p = cubemapFaceUv(dir);
+  const float fx = p.u * float(n) - 0.5f;
+  const float fy = p.v * float(n) - 0.5f;
+  // In [-1, n - 1] (u, v in [0, 1]); clamped against rounding at u = 1.
+  const int x0 = std::clamp(int(std::floor(fx)), -1, n - 1);
+  const int y0 = std::clamp(int(std::floor(fy)), -1, n - 1);
+  const float wx = fx - float(x0);
+  const float wy = fy - float(y0);
+  const glm::vec3* row = cube.texels.data() + (size_t(p.face) * size_t(m) + size_t(y0 + 1)) * size_t(m) + size_t(x0 + 1);
+  const glm::vec3 top = glm::mix(row[0], row[1], wx);
+  const glm::vec3 bottom = glm::mix(row[m], row[m + 1], wx);
+  return glm::mix(top, bottom, wy);
+}
+
 int cubemapBilinearTaps(int size, glm::vec3 dir, CubemapTap* taps) {
   if (size <= 0) return 0;
   // sampleCubemap step by step, recording texels instead of reading them.

@@ -12,7 +12,7 @@ namespace afterglow::runtime {
 
 namespace {
 
-glm::vec3 halves(const uint16_t h[3]) {
+glm::vec3 halves(const uint16_t* h) {
   return glm::vec3(halfToFloat(h[0]), halfToFloat(h[1]), halfToFloat(h[2]));
 }
 
@@ -93,6 +93,25 @@ glm::vec3 sampleChain(const CubemapChain& chain, glm::vec3 direction, float perc
   return glm::mix(a, sampleCubemap(chain[size_t(level + 1)], direction), f);
 }
 
+BorderedChain withBorders(const CubemapChain& chain) {
+  BorderedChain out;
+  out.reserve(chain.size());
+  for (const Cubemap& m : chain) out.push_back(withBorder(m));
+  return out;
+}
+
+glm::vec3 sampleChain(const BorderedChain& chain, glm::vec3 direction, float perceptualRoughness) {
+  if (chain.empty()) return glm::vec3(0.0f);
+  const int mips = int(chain.size());
+  const float mip = std::min(mipOfRoughness(perceptualRoughness, kReflectionMipCount),
+                             float(mips - 1));
+  const int level = std::min(int(mip), mips - 1);
+  const glm::vec3 a = sampleBorderedCubemap(chain[size_t(level)], direction);
+  const float f = mip - float(level);
+  if (f <= 0.0f || level + 1 >= mips) return a;
+  return glm::mix(a, sampleBorderedCubemap(chain[size_t(level + 1)], direction), f);
+}
+
 glm::vec2 sampleDfg(const std::vector<glm::vec2>& table, int size, float nDotV,
                     float perceptualRoughness) {
   if (size <= 0 || table.size() < size_t(size) * size_t(size)) return glm::vec2(0.0f);
@@ -110,46 +129,130 @@ glm::vec2 sampleDfg(const std::vector<glm::vec2>& table, int size, float nDotV,
                   glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), tx), ty);
 }
 
-glm::vec3 ReflectionLighting::specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
-                                       glm::vec3 f0, float perceptualRoughness,
-                                       const glm::vec3* lightmap) const {
-  if (!boxes || !chains || !dfg || chains->empty()) return glm::vec3(0.0f);
-  if (f0 == glm::vec3(0.0f)) return glm::vec3(0.0f);
+int reflectionLookups(const std::vector<ReflectionProbeBox>& boxes, glm::vec3 position,
+                      glm::vec3 normal, glm::vec3 toViewer, float perceptualRoughness,
+                      ReflectionLookup out[kMaxReflectionBlend]) {
   const float nDotV = glm::dot(normal, toViewer);
-  if (!(nDotV > 0.0f)) return glm::vec3(0.0f);
+  if (!(nDotV > 0.0f)) return 0;
   const float r = glm::clamp(perceptualRoughness, 0.0f, 1.0f), alpha = r * r;
   const glm::vec3 reflected = 2.0f * nDotV * normal - toViewer;
   // 1. The lobe's dominant direction (Lagarde & de Rousiers 2014, "Moving Frostbite to PBR",
   //    4.9.3): GGX's lobe leans from R toward N as it widens.
   const float lean = (1.0f - alpha) * (std::sqrt(1.0f - alpha) + alpha);
   const glm::vec3 dominant = glm::normalize(glm::mix(normal, reflected, lean));
-  glm::vec3 radiance(0.0f), irradiance(0.0f);
-  for (const ProbeWeight& w : reflectionProbesAt(*boxes, position)) {
-    if (size_t(w.probe) >= chains->size()) continue;
-    const CubemapChain& chain = (*chains)[size_t(w.probe)];
-    const ReflectionProbeBox* box = w.probe == 0 ? nullptr : &(*boxes)[size_t(w.probe - 1)];
+  std::vector<ProbeWeight> weights = reflectionProbesAt(boxes, position);
+  if (weights.size() > size_t(kMaxReflectionBlend)) {
+    std::stable_sort(weights.begin(), weights.end(),
+                     [](const ProbeWeight& a, const ProbeWeight& b) { return a.weight > b.weight; });
+    weights.resize(size_t(kMaxReflectionBlend));
+    float sum = 0.0f;
+    for (const ProbeWeight& w : weights) sum += w.weight;
+    for (ProbeWeight& w : weights) w.weight /= sum;
+  }
+  int count = 0;
+  for (const ProbeWeight& w : weights) {
+    const ReflectionProbeBox* box = w.probe == 0 ? nullptr : &boxes[size_t(w.probe - 1)];
+    ReflectionLookup& l = out[count++];
+    l.probe = w.probe;
+    l.weight = w.weight;
     // 2. Box projection corrects a sharp reflection's parallax; a rough lobe looked up around
     //    the projected direction gathers, from the capture position, light the surface cannot
     //    see (a lamp beside a ceiling), so the lookup fades back to the plain direction by α.
-    const glm::vec3 dir = box ? glm::normalize(glm::mix(boxProject(*box, position, dominant),
-                                                        dominant, alpha))
-                              : dominant;
-    radiance += w.weight * sampleChain(chain, dir, r);
-    // The probes' own E/π for this normal: their last mip is prefiltered for r = 1, where
-    // GGX's D is uniform and the prefilter's weight is the cosine alone.
-    if (lightmap) irradiance += w.weight * sampleChain(chain, box ? boxProject(*box, position, normal) : normal, 1.0f);
+    l.reflected = box ? glm::normalize(glm::mix(boxProject(*box, position, dominant), dominant, alpha))
+                      : dominant;
+    l.normal = box ? boxProject(*box, position, normal) : normal;
+  }
+  return count;
+}
+
+glm::vec3 ReflectionLighting::radiance(const ReflectionLookup* lookups, int count,
+                                       float perceptualRoughness, const glm::vec3* lightmap) const {
+  const float r = glm::clamp(perceptualRoughness, 0.0f, 1.0f);
+  glm::vec3 radiance(0.0f), irradiance(0.0f);
+  for (int k = 0; k < count; ++k) {
+    const ReflectionLookup& l = lookups[k];
+    if (size_t(l.probe) >= chains->size()) continue;
+    radiance += l.weight * (bordered ? sampleChain((*bordered)[size_t(l.probe)], l.reflected, r)
+                                     : sampleChain((*chains)[size_t(l.probe)], l.reflected, r));
+    if (lightmap && irradianceSh && size_t(l.probe) < irradianceSh->size())
+      irradiance += l.weight * glm::max(irradianceOverPi((*irradianceSh)[size_t(l.probe)], l.normal),
+                                        glm::vec3(0.0f));
   }
   // 3. Normalisation by the lightmap: the probes saw the room from their capture position, the
   //    lightmap saw it from the surface; scaling a rough reflection by the ratio of the two
   //    irradiances (by roughness: a mirror keeps its probe's image) puts back the surface's own
-  //    occlusion. The ratio is clamped to [0, 4] against a probe that saw nearly nothing.
-  if (lightmap)
+  //    occlusion. The probes' irradiance is their radiance SH's (chainIrradianceSh) in the
+  //    box-projected normal. The ratio is clamped to [0, 4] against a probe that saw nearly
+  //    nothing.
+  if (lightmap && irradianceSh)
     for (int c = 0; c < 3; ++c) {
-      const float ratio = irradiance[c] > 1e-8f ? std::min((*lightmap)[c] / irradiance[c], 4.0f) : 1.0f;
+      const float ratio =
+          irradiance[c] > 1e-8f ? std::min((*lightmap)[c] / irradiance[c], 4.0f) : 1.0f;
       radiance[c] *= 1.0f + r * (ratio - 1.0f);
     }
-  const glm::vec2 sb = sampleDfg(*dfg, dfgSize, nDotV, r);
-  return radiance * (f0 * sb.x + sb.y);
+  return radiance;
+}
+
+glm::vec3 ReflectionLighting::specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
+                                       glm::vec3 f0, float perceptualRoughness,
+                                       const glm::vec3* lightmap) const {
+  if (!boxes || !chains || !dfg || chains->empty()) return glm::vec3(0.0f);
+  if (f0 == glm::vec3(0.0f)) return glm::vec3(0.0f);
+  ReflectionLookup lookups[kMaxReflectionBlend];
+  const int count = reflectionLookups(*boxes, position, normal, toViewer, perceptualRoughness, lookups);
+  if (count == 0) return glm::vec3(0.0f);
+  const glm::vec2 sb = sampleDfg(*dfg, dfgSize, glm::dot(normal, toViewer), perceptualRoughness);
+  return radiance(lookups, count, perceptualRoughness, lightmap) * (f0 * sb.x + sb.y);
+}
+
+ShL2 chainIrradianceSh(const CubemapChain& chain) {
+  ShL2 sh;
+  if (chain.empty()) return sh;
+  size_t mip = 0;
+  while (mip + 1 < chain.size() && chain[mip].size > 16) ++mip;
+  const Cubemap& cube = chain[mip];
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = 0; y < cube.size; ++y)
+      for (int x = 0; x < cube.size; ++x)
+        projectRadiance(cubemapTexelDirection(face, x, y, cube.size), cube.at(face, x, y),
+                        cubemapTexelSolidAngle(x, y, cube.size), sh);
+  return sh;
+}
+
+ReflectionShadingSetup prepareReflectionShading(const TransportData& data, size_t probe,
+                                                const std::vector<glm::vec2>& dfg, int dfgSize) {
+  const ReflectionTransport& refl = data.reflections;
+  const ReflectionProbeCapture& p = refl.probes[probe];
+  const int size = int(p.resolution);
+  const std::vector<ReflectionProbeBox> boxes = refl.boxes();
+  ReflectionShadingSetup setup;
+  const size_t texels = size_t(kCubeFaceCount) * size_t(size) * size_t(size);
+  setup.start.reserve(texels + 1);
+  setup.start.push_back(0);
+  setup.specular.assign(texels, glm::vec3(0.0f));
+  const ReflectionHit* hits = refl.hits.data() + p.firstHit;
+  size_t k = 0;
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x, ++k) {
+        const ReflectionHit& h = hits[k];
+        const glm::vec3 f0 = halves(h.f0);
+        if (h.material != kReflectionMiss && f0 != glm::vec3(0.0f)) {
+          const glm::vec3 dir = cubemapTexelDirection(face, x, y, size);
+          const glm::vec3 normal = halves(h.normal);
+          const float roughness = halfToFloat(h.roughness);
+          ReflectionLookup lookups[kMaxReflectionBlend];
+          const int count = reflectionLookups(boxes, p.box.capturePosition + h.distance * dir,
+                                              normal, -dir, roughness, lookups);
+          if (count > 0) {
+            const glm::vec2 sb = sampleDfg(dfg, dfgSize, glm::dot(normal, -dir), roughness);
+            setup.specular[k] = f0 * sb.x + sb.y;
+            setup.lookups.insert(setup.lookups.end(), lookups, lookups + count);
+          }
+        }
+        setup.start.push_back(uint32_t(setup.lookups.size()));
+      }
+  return setup;
 }
 
 Cubemap skyCubemap(const glm::vec3 skySh[], int size) {
@@ -166,7 +269,8 @@ Cubemap skyCubemap(const glm::vec3 skySh[], int size) {
 
 Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
                                const std::vector<std::vector<glm::vec3>>& atlases,
-                               const ReflectionLighting* previous) {
+                               const ReflectionLighting* previous,
+                               const ReflectionShadingSetup* setup) {
   const ReflectionTransport& refl = data.reflections;
   const ReflectionProbeCapture& p = refl.probes[probe];
   const int size = int(p.resolution);
@@ -185,24 +289,26 @@ Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
     for (int y = 0; y < size; ++y)
       for (int x = 0; x < size; ++x, ++k) {
         const ReflectionHit& h = hits[k];
-        const glm::vec3 dir = cubemapTexelDirection(face, x, y, size);
         if (h.material == kReflectionMiss) {
-          cube.at(face, x, y) = glm::max(evalRadiance(sky, dir), glm::vec3(0.0f));
+          cube.at(face, x, y) =
+              glm::max(evalRadiance(sky, cubemapTexelDirection(face, x, y, size)), glm::vec3(0.0f));
           continue;
         }
         const MaterialParams& mat = data.materials[h.material];
-        glm::vec3 radiance = halves(h.emission) * mat.emission;
+        glm::vec3 radiance(0.0f);
+        if (mat.emission != glm::vec3(0.0f)) radiance = halves(h.emission) * mat.emission;
         glm::vec3 lightmap(0.0f);
         if (h.atlas != kReflectionNoAtlas) {
           const AtlasLayout& layout = data.atlases[h.atlas];
           lightmap = fetchAtlas(atlases[h.atlas], layout.width, layout.height, h.lightmapUv);
           radiance += halves(h.diffuse) * albedoScale[h.material] * lightmap;
         }
-        if (previous) {
-          const glm::vec3 position = p.box.capturePosition + h.distance * dir;
-          radiance += previous->specular(position, halves(h.normal), -dir, halves(h.f0),
+        if (previous && setup && setup->start[k] < setup->start[k + 1]) {
+          const uint32_t first = setup->start[k];
+          radiance += previous->radiance(&setup->lookups[first], int(setup->start[k + 1] - first),
                                          halfToFloat(h.roughness),
-                                         h.atlas != kReflectionNoAtlas ? &lightmap : nullptr);
+                                         h.atlas != kReflectionNoAtlas ? &lightmap : nullptr) *
+                      setup->specular[k];
         }
         cube.at(face, x, y) = radiance;
       }
@@ -221,13 +327,23 @@ std::vector<CubemapChain> solveReflectionProbes(const TransportData& data,
   if (refl.count() == 0) return chains;
   chains[0] = reflectionChain(skyCubemap(data.skySh, int(kReflectionSkyResolution)));
   const std::vector<ReflectionProbeBox> boxes = refl.boxes();
+  std::vector<ReflectionShadingSetup> setups;
+  if (refl.bounces > 0)
+    for (size_t i = 0; i < refl.count(); ++i)
+      setups.push_back(prepareReflectionShading(data, i, dfg, dfgSize));
   for (uint32_t pass = 0; pass <= refl.bounces; ++pass) {
     // Every probe of this pass reads the previous pass's chains, none of this pass's.
     const std::vector<CubemapChain> previousChains = chains;
-    ReflectionLighting lighting{&boxes, &previousChains, &dfg, dfgSize};
+    std::vector<ShL2> sh;
+    std::vector<BorderedChain> bordered;
+    for (const CubemapChain& c : previousChains) {
+      sh.push_back(chainIrradianceSh(c));
+      bordered.push_back(withBorders(c));
+    }
+    ReflectionLighting lighting{&boxes, &previousChains, &dfg, dfgSize, &sh, &bordered};
     for (size_t i = 0; i < refl.count(); ++i)
-      chains[i + 1] = reflectionChain(
-          shadeReflectionCapture(data, i, atlases, pass == 0 ? nullptr : &lighting));
+      chains[i + 1] = reflectionChain(shadeReflectionCapture(
+          data, i, atlases, pass == 0 ? nullptr : &lighting, pass == 0 ? nullptr : &setups[i]));
   }
   return chains;
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/runtime.h"
 
@@ -38,6 +39,8 @@ void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point 
   // The chains a pass reads: the sky, then the previous pass's probes (copied per pass into a
   // scratch array laid out as ReflectionLighting wants, [0] the sky).
   std::vector<CubemapChain> previous;
+  std::vector<ShL2> previousSh;
+  std::vector<BorderedChain> previousBordered;
   size_t previousPass = ~size_t(0);
   const std::vector<std::vector<glm::vec3>>& atlases = images_[front_];
   std::vector<uint8_t> published(probes, 0);
@@ -56,13 +59,24 @@ void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point 
         previous.assign(1, reflectionSky_);
         previous.insert(previous.end(), reflectionPasses_[pass - 1].begin(),
                         reflectionPasses_[pass - 1].end());
+        previousSh.clear();
+        previousBordered.clear();
+        for (const CubemapChain& c : previous) {
+          previousSh.push_back(chainIrradianceSh(c));
+          previousBordered.push_back(withBorders(c));
+        }
         previousPass = pass - 1;
       }
-      light = ReflectionLighting{&reflectionBoxes_, &previous, &dfg_, kDfgSize};
+      light = ReflectionLighting{&reflectionBoxes_, &previous, &dfg_, kDfgSize, &previousSh,
+                                 &previousBordered};
       lighting = &light;
+      // The static half of the probe's specular lookups, built on its first bounce pass.
+      if (reflectionSetups_.size() < probes) reflectionSetups_.resize(probes);
+      if (reflectionSetups_[probe].start.empty())
+        reflectionSetups_[probe] = prepareReflectionShading(data_, probe, dfg_, kDfgSize);
     }
-    reflectionPasses_[pass][probe] =
-        runtime::reflectionChain(shadeReflectionCapture(data_, probe, atlases, lighting));
+    reflectionPasses_[pass][probe] = runtime::reflectionChain(shadeReflectionCapture(
+        data_, probe, atlases, lighting, lighting ? &reflectionSetups_[probe] : nullptr));
     if (pass + 1 == reflectionPasses_.size()) published[probe] = 1;
     reflectionCursor_ = (reflectionCursor_ + 1) % units;
     ++stats.reflectionPasses;

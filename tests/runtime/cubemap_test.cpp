@@ -293,5 +293,27 @@ TEST(Cubemap, BilinearTapsAreTheLookup) {
   EXPECT_EQ(cubemapBilinearTaps(0, glm::vec3(1.0f, 0.0f, 0.0f), nullptr), 0);
 }
 
+// A bordered cubemap reads what sampleCubemap reads, bit for bit, everywhere (edges and corners
+// of small faces most of all).
+TEST(Cubemap, BorderedLookupEqualsSampleCubemap) {
+  for (int size : {1, 2, 4, 16}) {
+    Cubemap cube = makeCubemap(size);
+    for (size_t k = 0; k < cube.texels.size(); ++k)
+      cube.texels[k] = glm::vec3(float(k % 7), float(k % 11) * 0.5f, float(k) * 0.01f);
+    const BorderedCubemap bordered = withBorder(cube);
+    int differ = 0;
+    for (int i = 0; i < 20000; ++i) {
+      // A deterministic spread of directions (golden-angle spiral), edges and corners included.
+      const float z = 1.0f - 2.0f * (float(i) + 0.5f) / 20000.0f;
+      const float r = std::sqrt(std::max(0.0f, 1.0f - z * z)), phi = 2.39996323f * float(i);
+      const glm::vec3 d(r * std::cos(phi), r * std::sin(phi), z);
+      differ += sampleBorderedCubemap(bordered, d) != sampleCubemap(cube, d);
+    }
+    for (const glm::vec3 d : {glm::vec3(1, 1, 1), glm::vec3(-1, 1, 0), glm::vec3(0, 0, -1)})
+      differ += sampleBorderedCubemap(bordered, d) != sampleCubemap(cube, d);
+    EXPECT_EQ(differ, 0) << "size " << size;
+  }
+}
+
 }  // namespace
 }  // namespace afterglow::runtime

@@ -77,9 +77,11 @@ struct BakedReflections {
   std::vector<runtime::ReflectionProbeBox> boxes;  // probe i + 1's
   std::vector<runtime::CubemapChain> chains;       // [0] the sky, [i + 1] boxes[i]
   std::vector<glm::vec2> dfg;                      // kDfgSize² (scale, bias)
+  std::vector<runtime::ShL2> sh;                   // per chain, chainIrradianceSh
+  std::vector<runtime::BorderedChain> bordered;    // per chain, withBorders
   bool empty() const { return chains.empty(); }
   runtime::ReflectionLighting lighting() const {
-    return {&boxes, &chains, &dfg, runtime::kDfgSize};
+    return {&boxes, &chains, &dfg, runtime::kDfgSize, &sh, &bordered};
   }
 };
 Result<BakedReflections> loadBakedReflections(const std::string& gltfPath);

@@ -111,6 +111,18 @@ float cubemapTexelSolidAngle(int x, int y, int size);
 // neighbours' edge texels.
 glm::vec3 sampleCubemap(const Cubemap& cube, glm::vec3 dir);
 
+// A cubemap with a one-texel border around each face holding what sampleCubemap reads beyond
+// that face's edge (the neighbouring faces' values as it interpolates them), so a bilinear
+// lookup never branches: sampleBorderedCubemap(withBorder(c), d) == sampleCubemap(c, d) bit for
+// bit, several times faster on small faces (a rough mip's 2² faces are all edge). `size` stays
+// the face's own; texels holds 6 · (size + 2)² values.
+struct BorderedCubemap {
+  int size = 0;
+  std::vector<glm::vec3> texels;
+};
+BorderedCubemap withBorder(const Cubemap& cube);
+glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, glm::vec3 dir);
+
 // One texel's share of a filtered lookup: texels[index] (the layout above) times weight.
 struct CubemapTap {
   uint32_t index = 0;

@@ -39,6 +39,7 @@
 namespace afterglow::runtime {
 
 struct TransportData;
+struct ShL2;  // probe_sh.h (which includes transport.h, which includes this)
 
 constexpr uint32_t kReflectionMiss = 0xffffffffu;  // ReflectionHit::material of a miss
 constexpr uint16_t kReflectionNoAtlas = 0xffff;    // a surface without a lightmap
@@ -91,24 +92,77 @@ using CubemapChain = std::vector<Cubemap>;
 // mip mipOfRoughness(r, chain size), bilinear within a mip (sampleCubemap), linear between the
 // two mips around it. Black for an empty chain.
 glm::vec3 sampleChain(const CubemapChain& chain, glm::vec3 direction, float perceptualRoughness);
+// The same from the chain's bordered mips (cubemap.h's withBorder), equal bit for bit and
+// several times faster: what the capture passes and the render read.
+using BorderedChain = std::vector<BorderedCubemap>;
+BorderedChain withBorders(const CubemapChain& chain);
+glm::vec3 sampleChain(const BorderedChain& chain, glm::vec3 direction, float perceptualRoughness);
+
+// One probe's part in a point's specular lighting: its blend weight and the two box-projected
+// directions its chain is read in (the reflection, and the normal for the normalisation). They
+// depend on geometry only (the point, its normal and roughness, the viewer, the boxes), so a
+// capture computes them once (ReflectionShadingSetup) and every pass reads the chains alone.
+struct ReflectionLookup {
+  int probe = 0;               // 0 the sky, i + 1 boxes[i]
+  float weight = 0.0f;
+  glm::vec3 reflected{0.0f};   // where the probe's chain is read, at the roughness's mip
+  glm::vec3 normal{0.0f};      // where its irradiance is read
+};
+// At most this many probes blend at a point: where more boxes overlap, the largest weights are
+// kept and renormalised (engines blend two to four).
+constexpr int kMaxReflectionBlend = 4;
+// A point's lookups into out (kMaxReflectionBlend entries at most), for the unit shading normal
+// and the unit direction to the viewer; 0 when the point faces away from the viewer.
+int reflectionLookups(const std::vector<ReflectionProbeBox>& boxes, glm::vec3 position,
+                      glm::vec3 normal, glm::vec3 toViewer, float perceptualRoughness,
+                      ReflectionLookup out[kMaxReflectionBlend]);
 
 // The split-sum specular lighting at a point, from probes blended and box-projected as at run
-// time: chains[0] is the sky, chains[i + 1] boxes[i]; dfg is dfgTable(dfgSize). `toViewer` is
-// the unit direction from the point to the eye, `normal` the unit shading normal, `lightmap`
+// time: chains[0] is the sky, chains[i + 1] boxes[i]; dfg is dfgTable(dfgSize); irradianceSh
+// (one per chain, chainIrradianceSh) their radiance SH for the normalisation. `toViewer` is the
+// unit direction from the point to the eye, `normal` the unit shading normal, `lightmap`
 // (optional) the point's lightmap E/π. Three corrections engines apply to rough reflections
 // (reflection_capture.cpp): the lookup along GGX's dominant direction, box projection faded out
 // by α, and, with a lightmap, normalisation by the ratio of the lightmap's irradiance to the
 // probes' (weighted by roughness). On McGuire's Cornell box they take a 128² probe's mirror mip
-// from 9.6% to 4.0% RMSE against the path-traced reference (reflection_bake_test.cpp).
+// from 9.6% to 4.1% RMSE against the path-traced reference (reflection_bake_test.cpp).
 struct ReflectionLighting {
   const std::vector<ReflectionProbeBox>* boxes = nullptr;
   const std::vector<CubemapChain>* chains = nullptr;
   const std::vector<glm::vec2>* dfg = nullptr;
   int dfgSize = 0;
+  const std::vector<ShL2>* irradianceSh = nullptr;
+  // Optional: the chains bordered (withBorders), read instead of `chains` when given.
+  const std::vector<BorderedChain>* bordered = nullptr;
 
   glm::vec3 specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer, glm::vec3 f0,
                      float perceptualRoughness, const glm::vec3* lightmap = nullptr) const;
+  // The radiance of a point's lookups (before F0 · scale + bias), normalised by `lightmap`
+  // when given: the dynamic half of specular().
+  glm::vec3 radiance(const ReflectionLookup* lookups, int count, float perceptualRoughness,
+                     const glm::vec3* lightmap) const;
 };
+
+// A chain's radiance SH L2 (from its mip nearest 16², by texel solid angle): its irradiance
+// for the normalisation.
+ShL2 chainIrradianceSh(const CubemapChain& chain);
+
+// The static half of a probe's capture passes: per texel, its lookups and its split-sum
+// factor F0 · scale + bias (zero: no specular): 32 bytes a lookup, 16 a texel, 4-10 MB for a
+// 128² probe (floats: the passes read them for every texel, and half floats cost a third of
+// the pass in conversions). Built once per probe (prepareReflectionShading), kept by the
+// runtime; every pass reads it.
+struct ReflectionShadingSetup {
+  std::vector<uint32_t> start;            // texels + 1: texel t's lookups [start[t], start[t + 1])
+  std::vector<ReflectionLookup> lookups;
+  std::vector<glm::vec3> specular;        // per texel: F0 · scale + bias
+  size_t bytes() const {
+    return start.size() * sizeof(uint32_t) + lookups.size() * sizeof(ReflectionLookup) +
+           specular.size() * sizeof(glm::vec3);
+  }
+};
+ReflectionShadingSetup prepareReflectionShading(const TransportData& data, size_t probe,
+                                                const std::vector<glm::vec2>& dfg, int dfgSize);
 
 // (scale, bias) of a dfgTable of `size`, bilinear at (NdotV, r), clamped to the table.
 glm::vec2 sampleDfg(const std::vector<glm::vec2>& table, int size, float nDotV,
@@ -120,10 +174,12 @@ Cubemap skyCubemap(const glm::vec3 skySh[], int size);
 
 // Probe `probe`'s radiance cubemap, one capture pass: its hits shaded with the lightmap images
 // (`atlases`, per atlas width·height pixels as resolveAtlas makes them), the transport's current
-// materials and sky, and the previous pass's probes (`previous`, null in pass 0).
+// materials and sky, and the previous pass's probes (`previous`, null in pass 0) through the
+// probe's `setup` (prepareReflectionShading; may be null in pass 0).
 Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
                                const std::vector<std::vector<glm::vec3>>& atlases,
-                               const ReflectionLighting* previous);
+                               const ReflectionLighting* previous,
+                               const ReflectionShadingSetup* setup);
 
 // The bake's (and a from-scratch relight's) reflection probes: the sky chain, then pass 0 and
 // `data.reflections.bounces` more passes, each prefiltered into a chain (reflectionChain).
