@@ -2,7 +2,8 @@
 // (`afterglow probes place --add FILE.json`), a placement (`afterglow bake --probes
 // PROBES.json`, checked tetrahedra) and the baked SH file (OUT/probes/light_probes_sh.bin). Any
 // input must give a result or an error, never a crash, and every result must hold what its
-// reader promises: finite positions and SH, tetrahedra that pass runtime::checkProbeTetrahedra.
+// reader promises: finite positions and SH, tetrahedra that pass runtime::checkProbeTetrahedra,
+// reflection probes with positive finite boxes and power-of-two resolutions.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -33,6 +34,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (!runtime::checkProbeTetrahedra(file->mesh).empty()) std::abort();
     for (const glm::vec3& p : file->positions)
       if (!finite(p)) std::abort();
+    for (const probes::ReflectionProbeEntry& r : file->reflectionProbes) {
+      if (r.name.empty() || !finite(r.position) || !finite(r.size)) std::abort();
+      if (!(r.size.x > 0.0f && r.size.y > 0.0f && r.size.z > 0.0f)) std::abort();
+      if (!(r.blendDistance >= 0.0f) || !std::isfinite(r.blendDistance)) std::abort();
+      if (r.resolution < 8 || r.resolution > 2048 || (r.resolution & (r.resolution - 1))) std::abort();
+    }
   }
   runtime::ProbeShFile sh;
   std::string error;

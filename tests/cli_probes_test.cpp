@@ -2,7 +2,8 @@
 // off its surfaces, a valid tetrahedral mesh over them, the user's pinned probes by name, and a
 // picture; with --bake, probes added only across edges where the bake's light changes, never in
 // geometry, the same for any thread count; bad user files and budgets are refused with a message
-// naming the cause and nothing written.
+// naming the cause and nothing written; --reflection proposes reflection probes in the same file,
+// which the bake captures.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -247,6 +248,73 @@ TEST(CliProbes, BadUserProbesAndBudgetsAreRefusedAndWriteNothing) {
   CliRun verb = runCli(dir, "probes scatter builtin:cornell");
   EXPECT_EQ(verb.exitCode, 2);
   EXPECT_NE(verb.err.find("place"), std::string::npos) << verb.err;
+}
+
+// --reflection proposes one reflection probe for the Cornell box, its box the room (open at the
+// front, where it reaches the scene's bounds), written beside the light probes; the bake takes
+// it from the file, and a node of the scene authoring a probe of the same name wins.
+TEST(CliProbes, ReflectionProposesOneProbeForTheCornellBoxAndTheBakeCapturesIt) {
+  const std::string dir = tempDir("cli_probes_reflection");
+  CliRun run = runCli(dir, "probes place builtin:cornell --reflection -o '" + dir +
+                               "/p.json' --width 160 --height 100");
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  EXPECT_NE(run.out.find("reflection    1 reflection probe proposed"), std::string::npos)
+      << run.out;
+  const json doc = json::parse(slurp(dir + "/p.json"), nullptr, false);
+  ASSERT_TRUE(doc.is_object());
+  ASSERT_TRUE(doc.contains("reflectionProbes"));
+  ASSERT_EQ(doc["reflectionProbes"].size(), 1u);
+  const json& r = doc["reflectionProbes"][0];
+  EXPECT_EQ(r["name"], "reflection_probe_0");
+  const float room[3] = {0.556f, 0.5488f, 0.5592f};
+  for (size_t k = 0; k < 3; ++k) {
+    const float c = r["position"][k].get<float>(), half = 0.5f * r["size"][k].get<float>();
+    EXPECT_NEAR(c - half, 0.0f, 0.03f) << "axis " << k;
+    EXPECT_NEAR(c + half, room[k], 0.03f) << "axis " << k;
+  }
+  EXPECT_EQ(r["resolution"], 128);
+  EXPECT_EQ(r["boxProjection"], true);
+  EXPECT_EQ(doc["settings"]["reflection"], true);
+  EXPECT_EQ(doc["summary"]["reflection"]["proposed"], 1);
+  // Without --reflection the file has none, and its budget alone is a usage error.
+  CliRun plain = runCli(dir, "probes place builtin:cornell -o '" + dir + "/q.json' --quiet");
+  ASSERT_EQ(plain.exitCode, 0) << plain.err;
+  EXPECT_FALSE(json::parse(slurp(dir + "/q.json")).contains("reflectionProbes"));
+  CliRun lone = runCli(dir, "probes place builtin:cornell -o '" + dir +
+                                "/q.json' --max-reflection-probes 4");
+  EXPECT_EQ(lone.exitCode, 2);
+  EXPECT_NE(lone.err.find("--reflection"), std::string::npos) << lone.err;
+
+  // The bake captures the file's probe where the file puts it.
+  CliRun bake = runCli(dir, "bake builtin:cornell -o '" + dir + "/out' --quality draft "
+                            "--texels-per-unit 16 --probes '" + dir + "/p.json'");
+  ASSERT_EQ(bake.exitCode, 0) << bake.err;
+  EXPECT_NE(bake.out.find("1 reflection probe from"), std::string::npos) << bake.out;
+  const json baked = json::parse(slurp(dir + "/out/probes/reflection_probes.json"), nullptr, false);
+  ASSERT_TRUE(baked.is_object());
+  ASSERT_EQ(baked["probes"].size(), 2u);  // the sky, then ours
+  EXPECT_EQ(baked["probes"][1]["name"], "reflection_probe_0");
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_FLOAT_EQ(baked["probes"][1]["capturePosition"][k].get<float>(),
+                    r["position"][k].get<float>());
+    EXPECT_FLOAT_EQ(baked["probes"][1]["projectionBox"]["halfSize"][k].get<float>(),
+                    0.5f * r["size"][k].get<float>());
+  }
+
+  // Named as builtin:cornell-metal's own probe, the scene's node wins.
+  json renamed = doc;
+  renamed["reflectionProbes"][0]["name"] = "room_probe";
+  renamed["reflectionProbes"][0]["blendDistance"] = 0.5;
+  std::ofstream(dir + "/renamed.json") << renamed.dump();
+  CliRun metal = runCli(dir, "bake builtin:cornell-metal -o '" + dir + "/metal' --quality draft "
+                             "--texels-per-unit 16 --probes '" + dir + "/renamed.json'");
+  ASSERT_EQ(metal.exitCode, 0) << metal.err;
+  EXPECT_NE(metal.out.find("0 reflection probes from"), std::string::npos) << metal.out;
+  const json kept = json::parse(slurp(dir + "/metal/probes/reflection_probes.json"), nullptr, false);
+  ASSERT_TRUE(kept.is_object());
+  ASSERT_EQ(kept["probes"].size(), 2u);
+  EXPECT_EQ(kept["probes"][1]["name"], "room_probe");
+  EXPECT_FLOAT_EQ(kept["probes"][1]["blendDistance"].get<float>(), 0.1f);
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
 // The light probes' files read back: a placement (`afterglow bake --probes PROBES.json`) and the
-// baked SH file round trip; bad placements (NaN, a tetrahedron index out of range, neighbours
-// that do not match) and bad SH files are refused with one line naming the file and the object;
+// baked SH file round trip, and so do the reflection probes of probes place --reflection; bad
+// placements (NaN, a tetrahedron index out of range, neighbours that do not match, a reflection
+// probe's negative size or resolution that is not a power of two) and bad SH files are refused
+// with one line naming the file and the object;
 // and `afterglow bake` refuses them, or an automatic placement over --max-probes, writing
 // nothing.
 #include <filesystem>
@@ -156,6 +158,112 @@ TEST(ProbesFiles, BakeRefusesBadProbesAndWritesNothing) {
   std::string error;
   ASSERT_TRUE(runtime::readProbeSh(dir + "/out/probes/light_probes_sh.bin", sh, &error)) << error;
   EXPECT_EQ(sh.sh.size(), 5u);
+}
+
+// Two reflection probes as probes place --reflection writes them, beside the light probes.
+json withReflections() {
+  json doc = placement();
+  doc["reflectionProbes"] = json::parse(R"([
+    {"name": "hall", "position": [2.5, 1.5, 2], "size": [5, 3, 4], "blendDistance": 0.75,
+     "importance": 1, "boxProjection": true, "resolution": 128},
+    {"name": "porch", "position": [7.3, 1.75, 2], "size": [4, 3.5, 4]}])");
+  return doc;
+}
+
+TEST(ProbesFiles, ReflectionProbesRoundTripAndAreOptional) {
+  Result<probes::ProbesFile> none = probes::parseProbesFile(placement().dump(), "p.json");
+  ASSERT_TRUE(none) << none.message();
+  EXPECT_TRUE(none->reflectionProbes.empty());
+
+  Result<probes::ProbesFile> r = probes::parseProbesFile(withReflections().dump(), "p.json");
+  ASSERT_TRUE(r) << r.message();
+  ASSERT_EQ(r->reflectionProbes.size(), 2u);
+  const probes::ReflectionProbeEntry& hall = r->reflectionProbes[0];
+  EXPECT_EQ(hall.name, "hall");
+  EXPECT_EQ(hall.position, glm::vec3(2.5f, 1.5f, 2.0f));
+  EXPECT_EQ(hall.size, glm::vec3(5.0f, 3.0f, 4.0f));
+  EXPECT_EQ(hall.blendDistance, 0.75f);
+  // The second takes the glTF extras' defaults for what it leaves out.
+  const probes::ReflectionProbeEntry& porch = r->reflectionProbes[1];
+  EXPECT_EQ(porch.blendDistance, 1.0f);
+  EXPECT_EQ(porch.importance, 1);
+  EXPECT_TRUE(porch.boxProjection);
+  EXPECT_EQ(porch.resolution, 128);
+
+  // Written by probesJson and read back: the same probes, to the float, in tidy decimals.
+  std::vector<probes::ReflectionProbeEntry> entries = r->reflectionProbes;
+  entries[1].position = glm::vec3(0.1f, 1.234f, -2.5f);
+  entries[1].size = glm::vec3(0.3f, 1e-3f, 12.345f);
+  entries[1].blendDistance = 0.075f;
+  entries[1].importance = -3;
+  entries[1].boxProjection = false;
+  entries[1].resolution = 2048;
+  probes::Placement written;
+  written.positions = r->positions;
+  written.kinds = r->kinds;
+  const std::string text =
+      probes::probesJson(written, r->names, r->mesh, "{}", "{}", "", entries);
+  EXPECT_NE(text.find("[0.1,1.234,-2.5]"), std::string::npos) << text;
+  Result<probes::ProbesFile> again = probes::parseProbesFile(text, "again.json");
+  ASSERT_TRUE(again) << again.message();
+  ASSERT_EQ(again->reflectionProbes.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const probes::ReflectionProbeEntry &a = entries[i], &b = again->reflectionProbes[i];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.position, b.position);
+    EXPECT_EQ(a.size, b.size);
+    EXPECT_EQ(a.blendDistance, b.blendDistance);
+    EXPECT_EQ(a.importance, b.importance);
+    EXPECT_EQ(a.boxProjection, b.boxProjection);
+    EXPECT_EQ(a.resolution, b.resolution);
+  }
+  // Without reflection probes the file has no such member.
+  EXPECT_EQ(probes::probesJson(written, r->names, r->mesh, "{}", "{}").find("reflectionProbes"),
+            std::string::npos);
+}
+
+TEST(ProbesFiles, BadReflectionProbesNameTheFileAndTheProbe) {
+  auto bad = [](const char* key, const json& value) {
+    json doc = withReflections();
+    doc["reflectionProbes"][1][key] = value;
+    return doc;
+  };
+  const std::string porch = "reflection probe 1 ('porch')";
+  std::string e = errorOf(bad("size", json::array({4, -3.5, 4})));
+  EXPECT_NE(e.find(porch + ": \"size\" must be three positive"), std::string::npos) << e;
+  e = errorOf(bad("size", json::array({4, 0, 4})));
+  EXPECT_NE(e.find(porch), std::string::npos) << e;
+  e = errorOf(bad("resolution", 100));
+  EXPECT_NE(e.find(porch + ": \"resolution\" must be a power of two"), std::string::npos) << e;
+  e = errorOf(bad("resolution", 4096));
+  EXPECT_NE(e.find(porch), std::string::npos) << e;
+  e = errorOf(bad("position", json::array({0, "NaN", 0})));
+  EXPECT_NE(e.find(porch + ": \"position\""), std::string::npos) << e;
+  e = errorOf(bad("position", json::array({0, 3.5e39, 0})));  // infinite as a float
+  EXPECT_NE(e.find(porch + ": \"position\""), std::string::npos) << e;
+  e = errorOf(bad("blendDistance", -1));
+  EXPECT_NE(e.find(porch + ": \"blendDistance\""), std::string::npos) << e;
+  e = errorOf(bad("importance", 1.5));
+  EXPECT_NE(e.find(porch + ": \"importance\""), std::string::npos) << e;
+  e = errorOf(bad("boxProjection", "yes"));
+  EXPECT_NE(e.find(porch + ": \"boxProjection\""), std::string::npos) << e;
+  e = errorOf(bad("blendDistnace", 1));
+  EXPECT_NE(e.find(porch + ": unknown member \"blendDistnace\""), std::string::npos) << e;
+  e = errorOf(bad("name", "hall"));
+  EXPECT_NE(e.find("reflection probe 1 ('hall'): the name is taken"), std::string::npos) << e;
+  e = errorOf(bad("name", 7));
+  EXPECT_NE(e.find("reflection probe 1 has no \"name\""), std::string::npos) << e;
+
+  json missing = withReflections();
+  missing["reflectionProbes"][0].erase("size");
+  e = errorOf(missing);
+  EXPECT_NE(e.find("reflection probe 0 ('hall'): \"size\""), std::string::npos) << e;
+  json notArray = placement();
+  notArray["reflectionProbes"] = json::object();
+  EXPECT_NE(errorOf(notArray).find("\"reflectionProbes\" is not an array"), std::string::npos);
+  json notObject = placement();
+  notObject["reflectionProbes"] = json::array({1});
+  EXPECT_NE(errorOf(notObject).find("reflection probe 0 is not an object"), std::string::npos);
 }
 
 }  // namespace

@@ -81,7 +81,9 @@ const char kBakeHelp[] =
     "                           (default: both sides, as glTF says); written on the output's\n"
     "                           materials as extras.afterglow.singleSidedEmission\n"
     "  --probes auto|none|FILE  light probes: placed automatically (default, as afterglow\n"
-    "                           probes place does), none, or a PROBES.json from probes place\n"
+    "                           probes place does), none, or a PROBES.json from probes place;\n"
+    "                           a file's reflectionProbes (probes place --reflection) are\n"
+    "                           captured too, except one named as a node's own\n"
     "  --probe-spacing M        metres between grid probes for auto (default: from the level)\n"
     "  --max-probes N           refuse an auto placement of more probes (default 100000)\n"
     "  --probe-dering W         write the probes' SH deringed with this Hanning window (e.g.\n"
@@ -460,12 +462,37 @@ int runBake(int argc, char** argv, int first) {
     }
     probeSet = std::move(got.value());
     options.probes = probeSet.file.mesh;
+    // The file's reflection probes (probes place --reflection) join the scene's, except where a
+    // node of the scene authors one of the same name: the level's own probe wins over a proposal.
+    size_t reflectionAdded = 0, reflectionAuthored = 0;
+    for (const probes::ReflectionProbeEntry& r : probeSet.file.reflectionProbes) {
+      const bool authored =
+          std::any_of(scene.reflectionProbes.begin(), scene.reflectionProbes.end(),
+                      [&](const scenes::ReflectionProbe& p) { return p.name == r.name; });
+      if (authored) {
+        ++reflectionAuthored;
+        continue;
+      }
+      scene.reflectionProbes.push_back(probes::toSceneReflectionProbe(r));
+      ++reflectionAdded;
+    }
+    if (reflectionAuthored > 0)
+      info.warnings.push_back(format(
+          "%s: %zu of its reflection probes left out: the scene's nodes author probes of those "
+          "names",
+          probesMode.c_str(), reflectionAuthored));
     info.extraStages.push_back({"probe placement", secondsSince(probeStart)});
-    if (!quiet)
+    if (!quiet) {
       std::printf("probes        %zu (%s), %zu tetrahedra\n", probeSet.file.positions.size(),
                   probesMode == "auto" ? format("placed, spacing %.3g m", double(probeSet.spacing)).c_str()
                                        : probesMode.c_str(),
                   probeSet.file.mesh.tetrahedra.size());
+      if (!probeSet.file.reflectionProbes.empty())
+        std::printf("reflection    %zu reflection probe%s from %s (%zu named as the scene's "
+                    "own, left out)\n",
+                    reflectionAdded, reflectionAdded == 1 ? "" : "s", probesMode.c_str(),
+                    reflectionAuthored);
+    }
     std::fflush(stdout);
   }
 

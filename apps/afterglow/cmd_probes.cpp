@@ -1,6 +1,7 @@
 // `afterglow probes place`: light-probe placement (probes::placeProbes), refined where a bake's
 // light changes with --bake (probes::refineByBake), their tetrahedra (probes::tetrahedralize),
-// written as PROBES.json with a picture beside it. `probes sample` is in cmd_probes_sample.cpp.
+// written as PROBES.json with a picture beside it; with --reflection, reflection probes proposed
+// one per room-like region (probes::placeReflectionProbes) in the same file. `probes sample` is in cmd_probes_sample.cpp.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +23,7 @@
 #include "afterglow/probes/placement.h"
 #include "afterglow/probes/placement_picture.h"
 #include "afterglow/probes/probes_file.h"
+#include "afterglow/probes/reflection_placement.h"
 #include "afterglow/probes/tetrahedralize.h"
 #include "args.h"
 #include "baked_probes.h"
@@ -47,7 +49,7 @@ const char kProbesHelp[] =
     "  PROBES.png    the probes over the scene from its first camera (or an overview), coloured\n"
     "                by kind: grid white, refined cyan, moved orange, pinned magenta\n"
     "and prints a summary: candidates, placed, rejected inside geometry, moved, refined (and\n"
-    "added by --bake), time.\n"
+    "added by --bake), reflection probes proposed (--reflection), time.\n"
     "SCENE is a .gltf or .glb file, or a built-in scene: builtin:cornell,\n"
     "builtin:cornell-metal (mirror and copper blocks, a reflection probe), builtin:furnace.\n"
     "\n"
@@ -71,6 +73,14 @@ const char kProbesHelp[] =
     "                            --max-probes, the largest differences first; one pass\n"
     "  --refine-threshold X      the difference that splits an edge (default 0.25), relative to\n"
     "                            the brighter end (or to 1% of the brightest E/pi, if more)\n"
+    "  --reflection              also propose reflection probes, one per room-like region: a\n"
+    "                            coarse grid of candidates each fits a box to the walls around it\n"
+    "                            by ray distances; the best fitting boxes that do not overlap are\n"
+    "                            kept, written to PROBES.json's \"reflectionProbes\" (name,\n"
+    "                            position, size, blendDistance, importance, boxProjection,\n"
+    "                            resolution) to review and edit, and drawn yellow in PROBES.png;\n"
+    "                            afterglow bake --probes PROBES.json captures them\n"
+    "  --max-reflection-probes N at most this many (default 32), the best fitting first\n"
     "  --width N, --height N     the picture's size (default 960 x 600)\n"
     "  --threads N               worker threads (default: every core); the output is identical\n"
     "                            for any count\n"
@@ -107,7 +117,8 @@ int runPlace(int argc, char** argv, int first) {
   if (!args.parse(argc, argv, first,
                   {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"},
                    {"add"}, {"bake"}, {"refine-threshold"}, {"width"}, {"height"},
-                   {"threads"}, {"quiet", 0, false},
+                   {"threads"}, {"reflection", 0, false}, {"max-reflection-probes"},
+                   {"quiet", 0, false},
                    {"help", 'h', false}}))
     return usage(args.error());
   if (args.has("help")) {
@@ -123,7 +134,9 @@ int runPlace(int argc, char** argv, int first) {
 
   probes::PlacementOptions options;
   probes::BakeRefinementOptions refineOptions;
+  probes::ReflectionPlacementOptions reflectionOptions;
   int threads = 0, width = 960, height = 600, maxProbes = int(options.maxProbes);
+  int maxReflection = int(reflectionOptions.maxProbes);
   if (!args.getFloat("spacing", 0.0f, 0.0f, 1e6f, &options.spacing) ||
       !args.getInt("levels", options.levels, 0, 8, &options.levels) ||
       !args.getFloat("margin", 0.0f, -1e-30f, 1e6f, &options.margin) ||
@@ -131,6 +144,7 @@ int runPlace(int argc, char** argv, int first) {
       !args.getInt("width", width, 16, 8192, &width) ||
       !args.getInt("height", height, 16, 8192, &height) ||
       !args.getInt("threads", 0, 0, 1024, &threads) ||
+      !args.getInt("max-reflection-probes", maxReflection, 1, 4096, &maxReflection) ||
       !args.getFloat("refine-threshold", refineOptions.threshold, 0.0f, 1e6f,
                      &refineOptions.threshold))
     return usage(args.error());
@@ -139,6 +153,10 @@ int runPlace(int argc, char** argv, int first) {
   if (args.has("refine-threshold") && bakeDir.empty())
     return usage("--refine-threshold refines by a bake: give --bake OUT/ too");
   options.maxProbes = size_t(maxProbes);
+  const bool reflection = args.has("reflection");
+  if (args.has("max-reflection-probes") && !reflection)
+    return usage("--max-reflection-probes limits the proposals of --reflection: give it too");
+  reflectionOptions.maxProbes = size_t(maxReflection);
   const bool quiet = args.has("quiet");
   setThreadCount(threads);
 
@@ -241,6 +259,21 @@ int runPlace(int argc, char** argv, int first) {
     }
   }
 
+  probes::ReflectionPlacement reflections;
+  double reflectionSeconds = 0.0;
+  if (reflection) {
+    const auto reflectionStart = Clock::now();
+    Result<probes::ReflectionPlacement> proposed =
+        probes::placeReflectionProbes(scene, *tracer.value(), reflectionOptions, progress);
+    if (interrupted() || progress.cancelled()) return interruptedExit();
+    if (!proposed) {
+      printError(input + ": " + proposed.message());
+      return kExitBadInput;
+    }
+    reflections = std::move(proposed.value());
+    reflectionSeconds = secondsSince(reflectionStart);
+  }
+
   // The user's probes are the pinned ones, in their file's order: they take its names.
   std::vector<std::string> names(placement.positions.size());
   for (size_t i = 0, u = 0; i < placement.positions.size() && u < options.userNames.size(); ++i)
@@ -250,7 +283,7 @@ int runPlace(int argc, char** argv, int first) {
                                            : baker::cameraView(scene.cameras.front());
   const std::vector<glm::vec3> picture =
       probes::placementPicture(scene, *tracer.value(), placement, options.levels, view,
-                                 width, height);
+                                 width, height, reflections.probes);
 
   size_t pinned = 0;
   for (probes::ProbeKind k : placement.kinds) pinned += k == probes::ProbeKind::Pinned;
@@ -264,6 +297,11 @@ int runPlace(int argc, char** argv, int first) {
   if (baked) {
     settings["bake"] = bakeDir;
     settings["refineThreshold"] = refineOptions.threshold;
+  }
+  if (reflection) {
+    settings["reflection"] = true;
+    settings["maxReflectionProbes"] = reflectionOptions.maxProbes;
+    settings["reflectionSpacing"] = reflections.spacing;
   }
   nlohmann::json summary = {{"candidates", placement.candidates},
                             {"placed", placement.positions.size()},
@@ -284,8 +322,19 @@ int runPlace(int argc, char** argv, int first) {
                                  {"overBudget", refinement.overBudget},
                                  {"floor", refinement.floor},
                                  {"seconds", bakeSeconds}};
-  const std::string text =
-      probes::probesJson(placement, names, mesh.value(), settings.dump(), summary.dump());
+  if (reflection)
+    summary["reflection"] = {{"proposed", reflections.probes.size()},
+                             {"candidates", reflections.candidates},
+                             {"insideGeometry", reflections.inside},
+                             {"open", reflections.open},
+                             {"thin", reflections.thin},
+                             {"centreBlocked", reflections.centreBlocked},
+                             {"overlapping", reflections.overlapping},
+                             {"overBudget", reflections.overBudget},
+                             {"seconds", reflectionSeconds},
+                             {"warnings", reflections.warnings}};
+  const std::string text = probes::probesJson(placement, names, mesh.value(), settings.dump(),
+                                              summary.dump(), "", reflections.probes);
 
   // Both files through temporaries, renamed only once both are written.
   const fs::path outPath(output);
@@ -324,11 +373,22 @@ int runPlace(int argc, char** argv, int first) {
                   double(refineOptions.threshold), bakeDir.c_str(), refinement.shortEdges,
                   refinement.rejected, refinement.overBudget);
     std::printf("tetrahedra    %zu\n", mesh->tetrahedra.size());
-    std::printf("time          place %.2f s,%s tetrahedra %.2f s\n", placeSeconds,
+    if (reflection)
+      std::printf("reflection    %zu reflection probe%s proposed, from %zu candidates at %.3g m "
+                  "(%zu inside geometry, %zu open, %zu thin, %zu with the box's centre in "
+                  "geometry, %zu in a kept box, %zu over the budget)\n",
+                  reflections.probes.size(), reflections.probes.size() == 1 ? "" : "s",
+                  reflections.candidates, double(reflections.spacing),
+                  reflections.inside, reflections.open, reflections.thin,
+                  reflections.centreBlocked, reflections.overlapping, reflections.overBudget);
+    std::printf("time          place %.2f s,%s%s tetrahedra %.2f s\n", placeSeconds,
                 baked ? format(" bake refinement %.2f s,", bakeSeconds).c_str() : "",
+                reflection ? format(" reflection probes %.2f s,", reflectionSeconds).c_str() : "",
                 tetSeconds);
     for (const std::string& w : scene.warnings) std::printf("warning       %s\n", w.c_str());
     for (const std::string& w : placement.warnings) std::printf("warning       %s\n", w.c_str());
+    for (const std::string& w : reflections.warnings)
+      std::printf("warning       %s\n", w.c_str());
     std::printf("wrote         %s, %s\n", output.c_str(), picturePath.c_str());
   }
   return kExitOk;

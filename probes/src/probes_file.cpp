@@ -1,6 +1,8 @@
 #include "afterglow/probes/probes_file.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include <nlohmann/json.hpp>
 
@@ -9,9 +11,24 @@ namespace afterglow::probes {
 
 using json = nlohmann::json;
 
+namespace {
+
+// The shortest "%g" decimal that reads back to v as a float (v finite).
+std::string shortestDecimal(float v) {
+  char text[32];
+  for (int digits = 1; digits <= 9; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, double(v));
+    if (std::strtof(text, nullptr) == v) break;
+  }
+  return text;
+}
+
+}  // namespace
+
 std::string probesJson(const Placement& placement, const std::vector<std::string>& names,
                        const runtime::ProbeTetrahedra& mesh, const std::string& settingsJson,
-                       const std::string& summaryJson, const std::string& shJson) {
+                       const std::string& summaryJson, const std::string& shJson,
+                       const std::vector<ReflectionProbeEntry>& reflectionProbes) {
   json doc;
   doc["format"] = "afterglow-light-probes";
   doc["version"] = 1;
@@ -36,6 +53,22 @@ std::string probesJson(const Placement& placement, const std::vector<std::string
   }
   doc["tetrahedra"] = std::move(tetrahedra);
   doc["neighbours"] = std::move(neighbours);
+  if (!reflectionProbes.empty()) {
+    // Each number as the shortest decimal of its float, so a proposal's tidy millimetres are
+    // written as such and read back to the same float.
+    auto number = [](float v) { return json::parse(shortestDecimal(v)); };
+    auto vec = [&](glm::vec3 v) { return json::array({number(v.x), number(v.y), number(v.z)}); };
+    json reflections = json::array();
+    for (const ReflectionProbeEntry& r : reflectionProbes)
+      reflections.push_back({{"name", r.name},
+                             {"position", vec(r.position)},
+                             {"size", vec(r.size)},
+                             {"blendDistance", number(r.blendDistance)},
+                             {"importance", r.importance},
+                             {"boxProjection", r.boxProjection},
+                             {"resolution", r.resolution}});
+    doc["reflectionProbes"] = std::move(reflections);
+  }
   doc["settings"] = json::parse(settingsJson, nullptr, false);
   doc["summary"] = json::parse(summaryJson, nullptr, false);
   if (!shJson.empty()) doc["sh"] = json::parse(shJson, nullptr, false);

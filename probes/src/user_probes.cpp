@@ -1,8 +1,10 @@
 // Reading the light probes' files (the user's probes for `afterglow probes place --add`, a
 // placement for `afterglow bake --probes`), apart from the rest of the library so that the
 // fuzzer links it alone.
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <iterator>
 
 #include <nlohmann/json.hpp>
 
@@ -57,6 +59,91 @@ Result<UserProbes> parseUserProbes(const std::string& text, const std::string& p
   }
   return out;
 }
+
+namespace {
+
+// The "reflectionProbes" array (absent: none). Strict, as a glTF node's reflectionProbe is: a
+// probe that silently took a default would light the wrong region, and this file is edited by
+// hand.
+Status parseReflectionProbes(const json& doc, const std::string& path,
+                             std::vector<ReflectionProbeEntry>& out) {
+  auto list = doc.find("reflectionProbes");
+  if (list == doc.end()) return Status::ok();
+  if (!list->is_array())
+    return Status::error(path + ": \"reflectionProbes\" is not an array of reflection probes");
+  for (size_t i = 0; i < list->size(); ++i) {
+    const json& r = (*list)[i];
+    std::string where = path + ": reflection probe " + std::to_string(i);
+    if (!r.is_object()) return Status::error(where + " is not an object");
+    ReflectionProbeEntry e;
+    auto name = r.find("name");
+    if (name == r.end() || !name->is_string() || name->get<std::string>().empty())
+      return Status::error(where + " has no \"name\" (a non-empty string)");
+    e.name = name->get<std::string>();
+    where += " ('" + e.name + "')";
+    for (const ReflectionProbeEntry& earlier : out)
+      if (earlier.name == e.name)
+        return Status::error(where + ": the name is taken by an earlier reflection probe");
+    for (auto it = r.begin(); it != r.end(); ++it) {
+      static const char* const kKnown[] = {"name",       "position",      "size",
+                                           "blendDistance", "importance", "boxProjection",
+                                           "resolution"};
+      if (std::find(std::begin(kKnown), std::end(kKnown), it.key()) == std::end(kKnown))
+        return Status::error(where + ": unknown member \"" + it.key() +
+                             "\" (known: name, position, size, blendDistance, importance, "
+                             "boxProjection, resolution)");
+    }
+    // Three finite numbers (as floats too), all positive when `positive`.
+    auto vec3 = [&](const char* key, bool positive, glm::vec3& v) -> Status {
+      auto it = r.find(key);
+      bool ok = it != r.end() && it->is_array() && it->size() == 3;
+      for (int k = 0; ok && k < 3; ++k) {
+        const json& c = (*it)[size_t(k)];
+        ok = c.is_number() && std::isfinite(c.get<double>()) && std::abs(c.get<double>()) < 1e9;
+        if (ok) v[k] = float(c.get<double>());
+        ok = ok && (!positive || v[k] > 0.0f);
+      }
+      if (ok) return Status::ok();
+      return Status::error(where + ": \"" + key + "\" must be three " +
+                           (positive ? "positive " : "") + "finite numbers (metres)" +
+                           (it == r.end() ? std::string(", and is missing") : ", got " + it->dump()));
+    };
+    if (Status st = vec3("position", false, e.position); !st) return st;
+    if (Status st = vec3("size", true, e.size); !st) return st;
+    if (auto it = r.find("blendDistance"); it != r.end()) {
+      const double d = it->is_number() ? it->get<double>() : -1.0;
+      if (!(std::isfinite(d) && d >= 0.0 && d < 1e9))
+        return Status::error(where + ": \"blendDistance\" must be a number of metres >= 0, got " +
+                             it->dump());
+      e.blendDistance = float(d);
+    }
+    if (auto it = r.find("importance"); it != r.end()) {
+      const double v = it->is_number() ? it->get<double>() : 0.5;
+      if (!(std::isfinite(v) && v == std::floor(v) && std::abs(v) <= 1e6))
+        return Status::error(where + ": \"importance\" must be a whole number, got " + it->dump());
+      e.importance = int(v);
+    }
+    if (auto it = r.find("boxProjection"); it != r.end()) {
+      if (!it->is_boolean())
+        return Status::error(where + ": \"boxProjection\" must be true or false, got " +
+                             it->dump());
+      e.boxProjection = it->get<bool>();
+    }
+    if (auto it = r.find("resolution"); it != r.end()) {
+      const double v = it->is_number() ? it->get<double>() : 0.0;
+      const bool powerOfTwo = std::isfinite(v) && v >= 8.0 && v <= 2048.0 && v == std::floor(v) &&
+                              (int(v) & (int(v) - 1)) == 0;
+      if (!powerOfTwo)
+        return Status::error(where + ": \"resolution\" must be a power of two from 8 to 2048, "
+                                     "got " + it->dump());
+      e.resolution = int(v);
+    }
+    out.push_back(std::move(e));
+  }
+  return Status::ok();
+}
+
+}  // namespace
 
 Result<ProbesFile> parseProbesFile(const std::string& text, const std::string& path) {
   Result<UserProbes> base = parseUserProbes(text, path);
@@ -128,6 +215,7 @@ Result<ProbesFile> parseProbesFile(const std::string& text, const std::string& p
                          " tetrahedra");
   if (std::string bad = runtime::checkProbeTetrahedra(out.mesh); !bad.empty())
     return Status::error(path + ": " + bad);
+  if (Status st = parseReflectionProbes(doc, path, out.reflectionProbes); !st) return st;
   return out;
 }
 

@@ -1,7 +1,8 @@
 // A picture of the placed probes over the scene, so a person can check the placement at a glance:
 // the scene shaded plainly (base colour under a headlight, no bake needed), each probe a dot
 // coloured by its kind (grid white, refined cyan, moved orange, pinned magenta), drawn only
-// where the camera sees it, smaller with distance.
+// where the camera sees it, smaller with distance; and the proposed reflection probes' boxes as
+// yellow wireframes (dim where a surface hides them) with a yellow dot at each capture position.
 #pragma once
 
 #include <vector>
@@ -10,6 +11,7 @@
 
 #include "afterglow/baker/render.h"
 #include "afterglow/probes/placement.h"
+#include "afterglow/probes/reflection_placement.h"
 
 namespace afterglow::baker {
 class RayTracer;
@@ -23,9 +25,12 @@ namespace afterglow::probes {
 std::vector<glm::vec3> placementPicture(const scenes::Scene& scene,
                                         const baker::RayTracer& tracer, const Placement& placement,
                                         int levels, const baker::View& view, int width,
-                                        int height);
+                                        int height,
+                                        const std::vector<ReflectionProbeEntry>& reflections = {});
 
 // The colour a kind is shown in, as the PNG's values.
 glm::vec3 probeKindColour(ProbeKind kind);
+// The colour of the reflection probes' boxes, as the PNG's values.
+glm::vec3 reflectionBoxColour();
 
 }  // namespace afterglow::probes
