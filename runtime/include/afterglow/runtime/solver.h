@@ -116,11 +116,12 @@ class Solver {
   std::vector<glm::vec3> sourceScale_;      // per source: colour × intensity (or emission)
   std::vector<glm::vec4> probeBinSh_;       // the probes' region weights, laid out for
                                             //   probeBounce_ (solver.cpp)
-  // One probe's bounced light (the kernel the CPU runs best, picked at construction).
+  // One probe's bounced light (the kernel the CPU runs best, picked at construction), with the
+  // caller's zeroed scratch `sums` for its regions, which it leaves zeroed.
   std::vector<uint8_t> probeGroupRegion_;   // per group of kLinkGroup probe links, its region
   void (*probeBounce_)(const SparseLinks& links, size_t firstRow, uint32_t bins,
                        const uint8_t* groupRegion, const glm::vec4* binSh, const glm::vec4* r,
-                       glm::vec4 out[kShCount]) = nullptr;
+                       float* sums, glm::vec4 out[kShCount]) = nullptr;
 };
 
 // Unity's albedo boost: pulls albedo toward white as the boost grows (albedo^(1/boost); 1 and
