@@ -108,7 +108,9 @@ int reflectionBakeFigures(const std::string& path, float texelsPerUnit, int thre
       const runtime::CubemapChain chain = runtime::reflectionChain(cube);
       prefilterMs = std::min(prefilterMs, 1e3 * secondsSince(s0));
     }
-    if (std::getenv("AG_UNITS")) std::printf("probe %d shade %.2f ms\n", p, best);
+    if (std::getenv("AG_UNITS"))
+      std::printf("probe %d shade %.2f ms, %.2f lookups a texel\n", p, best,
+                  double(setups[size_t(p)].lookups.size()) / double(setups[size_t(p)].start.size() - 1));
     shadeMs = std::max(shadeMs, best);
   }
 

@@ -179,9 +179,12 @@ BorderedCubemap withBorder(const Cubemap& cube) {
 }
 
 glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, glm::vec3 dir) {
+  return sampleBorderedCubemap(cube, cubemapFaceUv(dir));
+}
+
+glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, const CubeFaceUv& p) {
   if (cube.size <= 0) return glm::vec3(0.0f);
   const int n = cube.size, m = n + 2;
-  const CubeFaceUv p = cubemapFaceUv(dir);
   const float fx = p.u * float(n) - 0.5f;
   const float fy = p.v * float(n) - 0.5f;
   // In [-1, n - 1] (u, v in [0, 1]); clamped against rounding at u = 1.

@@ -101,6 +101,11 @@ BorderedChain withBorders(const CubemapChain& chain) {
 }
 
 glm::vec3 sampleChain(const BorderedChain& chain, glm::vec3 direction, float perceptualRoughness) {
+  return sampleChain(chain, cubemapFaceUv(direction), perceptualRoughness);
+}
+
+glm::vec3 sampleChain(const BorderedChain& chain, const CubeFaceUv& direction,
+                      float perceptualRoughness) {
   if (chain.empty()) return glm::vec3(0.0f);
   const int mips = int(chain.size());
   const float mip = std::min(mipOfRoughness(perceptualRoughness, kReflectionMipCount),
@@ -161,6 +166,7 @@ int reflectionLookups(const std::vector<ReflectionProbeBox>& boxes, glm::vec3 po
     l.reflected = box ? glm::normalize(glm::mix(boxProject(*box, position, dominant), dominant, alpha))
                       : dominant;
     l.normal = box ? boxProject(*box, position, normal) : normal;
+    l.at = cubemapFaceUv(l.reflected);
   }
   return count;
 }
@@ -172,7 +178,7 @@ glm::vec3 ReflectionLighting::radiance(const ReflectionLookup* lookups, int coun
   for (int k = 0; k < count; ++k) {
     const ReflectionLookup& l = lookups[k];
     if (size_t(l.probe) >= chains->size()) continue;
-    radiance += l.weight * (bordered ? sampleChain((*bordered)[size_t(l.probe)], l.reflected, r)
+    radiance += l.weight * (bordered ? sampleChain((*bordered)[size_t(l.probe)], l.at, r)
                                      : sampleChain((*chains)[size_t(l.probe)], l.reflected, r));
     if (lightmap && irradianceSh && size_t(l.probe) < irradianceSh->size())
       irradiance += l.weight * glm::max(irradianceOverPi((*irradianceSh)[size_t(l.probe)], l.normal),

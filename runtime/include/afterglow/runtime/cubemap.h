@@ -122,6 +122,9 @@ struct BorderedCubemap {
 };
 BorderedCubemap withBorder(const Cubemap& cube);
 glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, glm::vec3 dir);
+// The same at a direction's face and u, v (cubemapFaceUv), for lookups of one direction on
+// several mips.
+glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, const CubeFaceUv& p);
 
 // One texel's share of a filtered lookup: texels[index] (the layout above) times weight.
 struct CubemapTap {

@@ -97,6 +97,7 @@ glm::vec3 sampleChain(const CubemapChain& chain, glm::vec3 direction, float perc
 using BorderedChain = std::vector<BorderedCubemap>;
 BorderedChain withBorders(const CubemapChain& chain);
 glm::vec3 sampleChain(const BorderedChain& chain, glm::vec3 direction, float perceptualRoughness);
+glm::vec3 sampleChain(const BorderedChain& chain, const CubeFaceUv& at, float perceptualRoughness);
 
 // One probe's part in a point's specular lighting: its blend weight and the two box-projected
 // directions its chain is read in (the reflection, and the normal for the normalisation). They
@@ -107,6 +108,7 @@ struct ReflectionLookup {
   float weight = 0.0f;
   glm::vec3 reflected{0.0f};   // where the probe's chain is read, at the roughness's mip
   glm::vec3 normal{0.0f};      // where its irradiance is read
+  CubeFaceUv at;               // `reflected`'s face and u, v (the same on every mip)
 };
 // At most this many probes blend at a point: where more boxes overlap, the largest weights are
 // kept and renormalised (engines blend two to four).
@@ -148,7 +150,7 @@ struct ReflectionLighting {
 ShL2 chainIrradianceSh(const CubemapChain& chain);
 
 // The static half of a probe's capture passes: per texel, its lookups and its split-sum
-// factor F0 · scale + bias (zero: no specular): 32 bytes a lookup, 16 a texel, 4-10 MB for a
+// factor F0 · scale + bias (zero: no specular): 44 bytes a lookup, 16 a texel, 4-10 MB for a
 // 128² probe (floats: the passes read them for every texel, and half floats cost a third of
 // the pass in conversions). Built once per probe (prepareReflectionShading), kept by the
 // runtime; every pass reads it.
