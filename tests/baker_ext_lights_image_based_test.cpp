@@ -4,6 +4,7 @@
 // independently of the table in the code; and the JSON the glTF gains.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -323,6 +324,61 @@ TEST(ExtLightsImageBased, AppendsToExistingLights) {
   EXPECT_EQ(doc["scenes"][0]["extensions"]["EXT_lights_image_based"]["light"], 1);
   EXPECT_EQ(doc["extensionsUsed"].size(), 2u);
   EXPECT_EQ(doc["images"][1]["uri"], "probes/baked_m0_f0.png");
+}
+
+// Detaching a light by name removes it, the images only it used (renumbering the others in
+// textures, texture extensions and the remaining lights), and the scenes' pointers to it; a
+// light kept renumbers, and with none left the extension goes. Then attaching again gives the
+// document one light of that name, as a relight needs of a baked glTF.
+TEST(ExtLightsImageBased, DetachRemovesTheLightAndOnlyItsImages) {
+  const std::string dir = test::tempDir("ext_lights_ibl_detach");
+  json doc = minimalGltf();
+  doc["images"] = json::array({{{"uri", "a.png"}}, {{"uri", "b.png"}}});
+  AtomicOutput out;
+  const std::vector<runtime::Cubemap> mips = {runtime::makeCubemap(2, glm::vec3(1.0f)),
+                                              runtime::makeCubemap(1, glm::vec3(1.0f))};
+  ImageBasedLightOptions other;
+  other.name = "studio";
+  other.imagePrefix = "studio";
+  ASSERT_TRUE(attachImageBasedLight(doc, dir, constantSky(glm::vec3(1.0f)), mips, out).isOk());
+  ASSERT_TRUE(attachImageBasedLight(doc, dir, constantSky(glm::vec3(2.0f)), mips, out, other).isOk());
+  // Images: a, b, 12 of "sky", 12 of "studio"; textures after them, one sharing a sky face.
+  doc["images"].push_back({{"uri", "c.png"}});  // 26
+  doc["textures"] = json::array({{{"source", 26}},
+                                 {{"source", 1}, {"extensions", {{"EXT_texture_webp", {{"source", 26}}}}}},
+                                 {{"source", 3}}});
+  doc["scenes"].push_back({{"extensions", {{"EXT_lights_image_based", {{"light", 0}}}}}});
+  doc["scenes"][0]["extensions"]["EXT_lights_image_based"]["light"] = 1;
+
+  EXPECT_EQ(detachImageBasedLights(doc, "nobody"), 0u);
+  EXPECT_EQ(detachImageBasedLights(doc, "sky"), 1u);
+  // 11 of the sky's images went (image 3, a face a texture uses, stays).
+  ASSERT_EQ(doc["images"].size(), 27u - 11u);
+  EXPECT_EQ(doc["images"][2]["uri"], "probes/sky_specular_m0_f1.png");
+  EXPECT_EQ(doc["images"][15]["uri"], "c.png");
+  EXPECT_EQ(doc["textures"][0]["source"], 15);
+  EXPECT_EQ(doc["textures"][1]["source"], 1);
+  EXPECT_EQ(doc["textures"][1]["extensions"]["EXT_texture_webp"]["source"], 15);
+  EXPECT_EQ(doc["textures"][2]["source"], 2);
+  const json& lights = doc["extensions"]["EXT_lights_image_based"]["lights"];
+  ASSERT_EQ(lights.size(), 1u);
+  EXPECT_EQ(lights[0]["name"], "studio");
+  EXPECT_EQ(lights[0]["specularImages"][0][0], 3);  // was 14
+  EXPECT_EQ(doc["images"][3]["uri"], "probes/studio_m0_f0.png");
+  EXPECT_EQ(doc["scenes"][0]["extensions"]["EXT_lights_image_based"]["light"], 0);
+  EXPECT_FALSE(doc["scenes"][1].contains("extensions"));  // it pointed at the sky
+
+  EXPECT_EQ(detachImageBasedLights(doc, "studio"), 1u);
+  EXPECT_FALSE(doc.contains("extensions"));
+  EXPECT_FALSE(doc["scenes"][0].contains("extensions"));
+  const json used = doc.value("extensionsUsed", json::array());
+  EXPECT_EQ(std::find(used.begin(), used.end(), "EXT_lights_image_based"), used.end());
+  ASSERT_EQ(doc["images"].size(), 4u);  // a, b, the sky face a texture uses, c
+  EXPECT_EQ(doc["textures"][0]["source"], 3);
+
+  ASSERT_TRUE(attachImageBasedLight(doc, dir, constantSky(glm::vec3(3.0f)), mips, out).isOk());
+  EXPECT_EQ(doc["extensions"]["EXT_lights_image_based"]["lights"].size(), 1u);
+  EXPECT_EQ(doc["scenes"][1]["extensions"]["EXT_lights_image_based"]["light"], 0);
 }
 
 }  // namespace

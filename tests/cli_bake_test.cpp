@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "afterglow/baker/bake.h"
+#include "afterglow/baker/reflection_exr.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -163,6 +164,88 @@ TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
     }
   }
   EXPECT_EQ(lightmapped, 8u);  // 5 walls, 2 blocks, the lamp
+}
+
+// A level with a reflection probe (builtin:cornell-metal's 128² room probe) gets the files the
+// README documents: per probe and the sky an OpenEXR cube map whose levels are the prefiltered
+// mips (7) then OpenEXR's remaining levels down to 1×1 (floor(log2(6 × size)) + 1 in all), the
+// DFG table, reflection_probes.json listing the probes, and the sky in the glTF.
+TEST(CliBake, ReflectionProbesWriteCubeMapsDfgAndTheirJson) {
+  const std::string dir = tempDir("cli_bake_reflections");
+  const std::string out = dir + "/out";
+  CliRun r = runCli(dir, "bake builtin:cornell-metal -o '" + out +
+                          "' --quality draft --texels-per-unit 32 --quiet");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+
+  struct Cube {
+    const char* file;
+    int size;
+    int fileLevels;  // floor(log2(6 size)) + 1
+  };
+  for (const Cube& c : {Cube{"reflection_sky.exr", 64, 9}, Cube{"reflection_1.exr", 128, 10}}) {
+    SCOPED_TRACE(c.file);
+    const std::string path = out + "/probes/" + c.file;
+    auto in = OIIO::ImageInput::open(path);
+    ASSERT_TRUE(in) << OIIO::geterror();
+    EXPECT_EQ(in->spec().width, c.size);
+    EXPECT_EQ(in->spec().height, 6 * c.size);
+    EXPECT_EQ(in->spec().get_string_attribute("textureformat"), "CubeFace Environment");
+    EXPECT_EQ(in->spec().get_int_attribute("afterglow:prefilteredLevels"), 7);
+    int levels = 0;
+    while (in->seek_subimage(0, levels)) ++levels;
+    EXPECT_EQ(levels, c.fileLevels);
+    in->close();
+    Result<std::vector<runtime::Cubemap>> mips = baker::readCubemapExr(path);
+    ASSERT_TRUE(mips) << mips.message();
+    ASSERT_EQ(mips->size(), 7u);
+    for (size_t m = 0; m < mips->size(); ++m) EXPECT_EQ((*mips)[m].size, c.size >> m) << m;
+  }
+  auto dfg = OIIO::ImageInput::open(out + "/probes/dfg.exr");
+  ASSERT_TRUE(dfg);
+  EXPECT_EQ(dfg->spec().width, 64);
+  EXPECT_EQ(dfg->spec().height, 64);
+
+  const json doc = json::parse(slurp(out + "/probes/reflection_probes.json"));
+  EXPECT_EQ(doc.at("format"), "afterglow-reflection-probes");
+  EXPECT_EQ(doc.at("mipCount"), 7);
+  ASSERT_EQ(doc.at("mipRoughness").size(), 7u);
+  EXPECT_EQ(doc["mipRoughness"][0].get<double>(), 0.0);
+  EXPECT_NEAR(doc["mipRoughness"][6].get<double>(), 1.0, 1e-6);
+  EXPECT_EQ(doc.at("dfg").at("file"), "dfg.exr");
+  EXPECT_EQ(doc.at("bounces"), 1);
+  const json& probes = doc.at("probes");
+  ASSERT_EQ(probes.size(), 2u);
+  EXPECT_EQ(probes[0].at("name"), "sky");
+  EXPECT_EQ(probes[0].at("file"), "reflection_sky.exr");
+  EXPECT_EQ(probes[0].at("faceSize"), 64);
+  EXPECT_EQ(probes[0].at("fileMips"), 7);
+  const json& room = probes[1];
+  EXPECT_EQ(room.at("index"), 1);
+  EXPECT_EQ(room.at("name"), "room_probe");
+  EXPECT_EQ(room.at("file"), "reflection_1.exr");
+  EXPECT_EQ(room.at("faceSize"), 128);
+  EXPECT_EQ(room.at("fileMips"), 7);
+  const double half[3] = {0.278, 0.2744, 0.2796};  // the room, 556 × 548.8 × 559.2 mm
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(room.at("box").at("halfSize")[size_t(a)].get<double>(), half[a], 1e-5) << a;
+    EXPECT_NEAR(room.at("box").at("centre")[size_t(a)].get<double>(), half[a], 1e-5) << a;
+    EXPECT_NEAR(room.at("capturePosition")[size_t(a)].get<double>(), half[a], 1e-5) << a;
+  }
+  EXPECT_NEAR(room.at("blendDistance").get<double>(), 0.1, 1e-6);
+  EXPECT_EQ(room.at("importance"), 1);
+  EXPECT_EQ(room.at("boxProjection"), true);
+
+  // The sky in the glTF: one EXT_lights_image_based light, 7 mips of 6 face PNGs beside it.
+  const json gltf = json::parse(slurp(out + "/scene.gltf"));
+  const json& lights = gltf.at("extensions").at("EXT_lights_image_based").at("lights");
+  ASSERT_EQ(lights.size(), 1u);
+  EXPECT_EQ(lights[0].at("specularImageSize"), 64);
+  ASSERT_EQ(lights[0].at("specularImages").size(), 7u);
+  for (const json& mip : lights[0]["specularImages"]) {
+    ASSERT_EQ(mip.size(), 6u);
+    for (const json& face : mip)
+      EXPECT_TRUE(fs::exists(out + "/" + gltf.at("images").at(face.get<size_t>()).at("uri").get<std::string>()));
+  }
 }
 
 TEST(CliBake, OverTheMemoryBudgetRefusesAndWritesNothing) {

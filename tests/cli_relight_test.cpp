@@ -1,6 +1,6 @@
 // `afterglow relight` run as a user would: a relit sky equals a bake with that sky, file for
-// file; relit light probes equal a fresh bake's; bad names and folders are refused with a
-// message naming them and nothing written; the relit folder renders.
+// file; relit light probes and reflection probes equal a fresh bake's; bad names and folders
+// are refused with a message naming them and nothing written; the relit folder renders.
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -17,7 +17,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "afterglow/baker/reflection_exr.h"
 #include "afterglow/runtime/probe_sh_file.h"
+#include "afterglow/runtime/reflection_prefilter.h"
+#include "afterglow/runtime/transport.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
 #include "test_util.h"
@@ -200,6 +203,149 @@ TEST(CliRelight, RelitProbesEqualAFreshBakesProbes) {
   EXPECT_EQ(note["changes"][0].at("light"), "lamp");
   EXPECT_EQ(json::parse(slurp(dir + "/relit/report.json")).at("relight").at("probes"),
             want.size());
+}
+
+// The reflection probes' done-when through the CLI: a level with two reflection probes (the
+// metal Cornell box, its front left open so the sky lights it, with a point light), baked with a
+// warm light and one sky, relit with a blue light and another sky, equals a fresh bake of the
+// level with that light and sky: every cubemap file (the sky's and both probes', every mip),
+// dfg.exr, reflection_probes.json and the sky's EXT_lights_image_based in scene.gltf. The two
+// glTFs differ in the light's colour alone, so both bakes trace the very same rays.
+scenes::Scene reflectionLevel(glm::vec3 lampColor) {
+  scenes::Scene scene = scenes::makeCornellMetalBox();
+  // Open the front again (makeCornellMetalBox closes it last) so the sky reaches in.
+  EXPECT_EQ(scene.instances.back().name, "front_wall");
+  scene.instances.pop_back();
+  scene.meshes.pop_back();
+  // Small probes keep the test fast: the room's (authored box) and a fitted one by the mirror.
+  EXPECT_EQ(scene.reflectionProbes.size(), 1u);
+  scene.reflectionProbes[0].resolution = 16;
+  scenes::ReflectionProbe fitted = scene.reflectionProbes[0];
+  fitted.name = "corner_probe";
+  fitted.size = glm::vec3(0.0f);  // fitted to the walls by the bake
+  fitted.resolution = 32;
+  fitted.importance = 2;
+  fitted.transform[3] = glm::vec4(0.15f, 0.35f, 0.4f, 1.0f);
+  scene.reflectionProbes.push_back(fitted);
+  scenes::Light lamp;
+  lamp.name = "lamp";
+  lamp.type = scenes::LightType::Point;
+  lamp.position = glm::vec3(0.35f, 0.4f, 0.25f);
+  lamp.radius = 0.02f;
+  lamp.intensity = 0.5f;
+  lamp.color = lampColor;
+  scene.lights.push_back(lamp);
+  return scene;
+}
+
+// Per texel of two cube files' every mip: how many differ and by how many half-float steps at
+// most (the files are half floats: a value read back is exactly a half).
+struct CubeDiff {
+  size_t values = 0, differ = 0;
+  int worstSteps = 0;
+};
+CubeDiff compareCubes(const std::vector<runtime::Cubemap>& a, const std::vector<runtime::Cubemap>& b) {
+  CubeDiff d;
+  EXPECT_EQ(a.size(), b.size());
+  for (size_t m = 0; m < std::min(a.size(), b.size()); ++m) {
+    EXPECT_EQ(a[m].size, b[m].size) << "mip " << m;
+    if (a[m].texels.size() != b[m].texels.size()) continue;
+    for (size_t t = 0; t < a[m].texels.size(); ++t)
+      for (int c = 0; c < 3; ++c, ++d.values) {
+        const uint16_t x = runtime::floatToHalf(a[m].texels[t][c]);
+        const uint16_t y = runtime::floatToHalf(b[m].texels[t][c]);
+        if (x == y) continue;
+        ++d.differ;
+        // Non-negative halves order as their bits do.
+        d.worstSteps = std::max(d.worstSteps, std::abs(int(x) - int(y)));
+      }
+  }
+  return d;
+}
+
+std::vector<runtime::Cubemap> readCube(const std::string& path) {
+  Result<std::vector<runtime::Cubemap>> cube = baker::readCubemapExr(path);
+  EXPECT_TRUE(cube) << cube.message();
+  return cube ? std::move(cube.value()) : std::vector<runtime::Cubemap>();
+}
+
+// The scene.gltf's EXT_lights_image_based lights.
+json imageBasedLights(const std::string& gltfPath) {
+  const json gltf = json::parse(slurp(gltfPath));
+  return gltf.at("extensions").at("EXT_lights_image_based").at("lights");
+}
+
+TEST(CliRelight, RelitReflectionProbesEqualAFreshBakes) {
+  const std::string dir = tempDir("cli_relight_reflections");
+  ASSERT_TRUE(scenes::saveGltf(reflectionLevel({1.0f, 0.8f, 0.6f}), dir + "/warm/level.gltf"));
+  ASSERT_TRUE(scenes::saveGltf(reflectionLevel({0.2f, 0.5f, 1.0f}), dir + "/blue/level.gltf"));
+  const std::string newSky = "0.5,0.7,1.4";
+  CliRun bake = runCli(dir, "bake '" + dir + "/warm/level.gltf' -o '" + dir +
+                            "/out' --sky 0.2,0.2,0.3 " + kBake);
+  ASSERT_EQ(bake.exitCode, 0) << bake.err;
+  CliRun fresh = runCli(dir, "bake '" + dir + "/blue/level.gltf' -o '" + dir + "/fresh' --sky " +
+                             newSky + " " + kBake);
+  ASSERT_EQ(fresh.exitCode, 0) << fresh.err;
+  CliRun relit = runCli(dir, "relight '" + dir + "/out' --light lamp=0.2,0.5,1.0 --sky " + newSky +
+                             " -o '" + dir + "/relit'");
+  ASSERT_EQ(relit.exitCode, 0) << relit.err;
+  EXPECT_NE(relit.out.find("2 reflection probes"), std::string::npos) << relit.out;
+
+  // Every cube file, every mip: the relight's equals the fresh bake's, and the change did
+  // change them.
+  for (const char* file : {"reflection_sky.exr", "reflection_1.exr", "reflection_2.exr"}) {
+    SCOPED_TRACE(file);
+    const std::vector<runtime::Cubemap> want = readCube(dir + "/fresh/probes/" + file);
+    const std::vector<runtime::Cubemap> got = readCube(dir + "/relit/probes/" + file);
+    const std::vector<runtime::Cubemap> before = readCube(dir + "/out/probes/" + file);
+    ASSERT_FALSE(want.empty());
+    const CubeDiff diff = compareCubes(got, want);
+    const CubeDiff change = compareCubes(before, want);
+    std::printf("%s: relit vs fresh bake %zu of %zu half floats differ (at most %d steps); the "
+                "change itself altered %zu\n", file, diff.differ, diff.values, diff.worstSteps,
+                change.differ);
+    EXPECT_EQ(diff.differ, 0u);
+    EXPECT_GT(change.differ, diff.values / 2);
+  }
+  // The DFG table's pixels (the files differ in their capDate).
+  const std::vector<float> dfg = readExr(dir + "/relit/probes/dfg.exr");
+  EXPECT_EQ(dfg.size(), size_t(runtime::kDfgSize * runtime::kDfgSize * 3));
+  EXPECT_TRUE(dfg == readExr(dir + "/fresh/probes/dfg.exr"));
+  EXPECT_EQ(json::parse(slurp(dir + "/relit/probes/reflection_probes.json")),
+            json::parse(slurp(dir + "/fresh/probes/reflection_probes.json")));
+
+  // The glTF's sky: one light, the relit sky's coefficients and specular faces (the same PNGs
+  // as the fresh bake's), its images in RELIT/probes/, not OUT's.
+  const json relitLights = imageBasedLights(dir + "/relit/scene.gltf");
+  const json freshLights = imageBasedLights(dir + "/fresh/scene.gltf");
+  ASSERT_EQ(relitLights.size(), 1u);
+  ASSERT_EQ(freshLights.size(), 1u);
+  EXPECT_EQ(relitLights[0].at("irradianceCoefficients"), freshLights[0].at("irradianceCoefficients"));
+  EXPECT_NE(relitLights[0].at("irradianceCoefficients"),
+            imageBasedLights(dir + "/out/scene.gltf")[0].at("irradianceCoefficients"));
+  const json relitGltf = json::parse(slurp(dir + "/relit/scene.gltf"));
+  size_t faces = 0;
+  for (const json& mip : relitLights[0].at("specularImages"))
+    for (const json& face : mip) {
+      const std::string uri = relitGltf.at("images").at(face.get<size_t>()).at("uri");
+      ASSERT_EQ(uri.rfind("probes/sky_specular_", 0), 0u) << uri;
+      EXPECT_TRUE(slurp(dir + "/relit/" + uri) == slurp(dir + "/fresh/" + uri)) << uri;
+      ++faces;
+    }
+  EXPECT_EQ(faces, 7u * 6u);  // the 64² sky: 7 mips of 6 faces
+  // The level's other images (the lightmaps) are still there and still found.
+  for (const json& image : relitGltf.at("images")) {
+    const std::string uri = image.at("uri");
+    EXPECT_TRUE(fs::exists(fs::path(dir) / "relit" / uri)) << uri;
+  }
+  const json report = json::parse(slurp(dir + "/relit/report.json"));
+  EXPECT_EQ(report.at("relight").at("reflectionProbes"), 2);  // the level's, the sky besides
+  EXPECT_EQ(report.at("relight").at("reflectionPasses"), 4);  // (1 bounce + 1) × 2 probes
+
+  // And the relit folder renders with its relit reflections.
+  CliRun render = runCli(dir, "render '" + dir + "/relit/scene.gltf' --camera Camera --width 32 "
+                              "--height 24 -o '" + dir + "/view.png' --quiet");
+  EXPECT_EQ(render.exitCode, 0) << render.err;
 }
 
 TEST(CliRelight, BadNamesAndFoldersAreRefusedAndWriteNothing) {

@@ -39,8 +39,13 @@ const char kRelightHelp[] =
     "*.png, RELIT/scene.gltf (OUT's, with the changed lights and materials) and\n"
     "RELIT/report.json, so 'afterglow render RELIT/scene.gltf' shows the result, and the relit\n"
     "light probes: RELIT/probes/light_probes.json (OUT's, its settings noting the relight) and\n"
-    "RELIT/probes/light_probes_sh.bin. Options that name a light or material may repeat; NAME\n"
-    "may also be #INDEX.\n"
+    "RELIT/probes/light_probes_sh.bin. When the bake has reflection probes, their cubemaps are\n"
+    "relit too (every capture pass, from the relit lightmaps) and written as the bake writes\n"
+    "them: RELIT/probes/reflection_sky.exr and reflection_<i>.exr (OpenEXR cube maps, the\n"
+    "prefiltered mips as mip levels), dfg.exr, reflection_probes.json, and the relit sky as\n"
+    "EXT_lights_image_based in RELIT/scene.gltf (RELIT/probes/sky_specular_*.png), so they\n"
+    "equal a fresh bake's with the same changes. Options that name a light or material may\n"
+    "repeat; NAME may also be #INDEX.\n"
     "\n"
     "Options:\n"
     "  -o, --output RELIT/          output folder (required)\n"
@@ -477,10 +482,13 @@ int runRelight(int argc, char** argv, int first) {
   }
 
   // From scratch, with the bake's stopping rule: the same passes a fresh bake with these
-  // settings runs, so the lightmaps agree with it.
+  // settings runs, so the lightmaps agree with it. Then every reflection probe's every capture
+  // pass (a full round: the bake's solveReflectionProbes, in its order) from those lightmaps,
+  // so the cubemaps agree with the bake's too.
   runtime::UpdateOptions update;
   update.maxBounces = bounces;
   update.fromScratch = true;
+  update.reflectionPasses = -1;
   const runtime::UpdateStats stats = rt->update(update);
   if (interrupted()) return interruptedExit();
 
@@ -530,8 +538,8 @@ int runRelight(int argc, char** argv, int first) {
         continue;
       image["uri"] = fs::proximate(fs::absolute(in / uri), fs::absolute(outDir)).generic_string();
     }
-  Status s = files.write((outDir / "scene.gltf").string(), gltf.dump(1) + "\n");
-  if (s && gltf.contains("buffers"))
+  Status s = Status::ok();
+  if (gltf.contains("buffers"))
     for (const json& b : gltf["buffers"]) {
       const std::string uri = b.value("uri", std::string());
       if (uri.empty() || uri.rfind("data:", 0) == 0) continue;
@@ -547,11 +555,26 @@ int runRelight(int argc, char** argv, int first) {
     s = files.write((dir / "light_probes.json").string(), relitProbes->text);
     if (s) s = files.write((dir / "light_probes_sh.bin").string(), relitProbes->sh);
   }
+  // The relit reflection probes, through the bake's own writer: the cube EXRs, dfg.exr,
+  // reflection_probes.json and the sky's EXT_lights_image_based, replacing the bake's (whose
+  // images the loop above pointed back into OUT/) in the glTF written below.
+  std::vector<std::string> reflectionFiles;
+  if (s && rt->reflectionProbeCount() > 0) {
+    std::vector<runtime::CubemapChain> chains;
+    for (int p = 0; p < rt->reflectionProbeCount(); ++p) chains.push_back(rt->reflectionChain(p));
+    s = baker::writeReflectionOutputs(rt->data(), chains, rt->dfgTable(), outDir.string(), gltf,
+                                      files, reflectionFiles);
+  }
+  if (s) s = files.write((outDir / "scene.gltf").string(), gltf.dump(1) + "\n");
   report["relight"] = {{"from", fs::absolute(in).string()},
                        {"changes", changes},
                        {"bounces", stats.bounces},
                        {"converged", stats.converged},
                        {"probes", relitProbes ? rt->probeCount() : 0},
+                       // The level's, as printed below (the sky's cubemap comes besides).
+                       {"reflectionProbes", std::max(0, rt->reflectionProbeCount() - 1)},
+                       {"reflectionPasses", stats.reflectionPasses},
+                       {"reflectionMilliseconds", stats.reflectionMilliseconds},
                        {"loadSeconds", loadSeconds},
                        {"updateMilliseconds", stats.milliseconds},
                        {"warnings", warnings}};
@@ -569,8 +592,13 @@ int runRelight(int argc, char** argv, int first) {
                 rt->materialCount());
     std::printf("solved        %d bounces%s in %.1f ms\n", stats.bounces,
                 stats.converged ? " (converged)" : "", stats.milliseconds);
-    std::printf("wrote         %s (%d atlases, %d light probes)\n", outDir.string().c_str(),
-                rt->atlasCount(), relitProbes ? rt->probeCount() : 0);
+    if (stats.reflectionPasses > 0)
+      std::printf("reflections   %d probes and the sky, %d capture passes in %.1f ms\n",
+                  rt->reflectionProbeCount() - 1, stats.reflectionPasses,
+                  stats.reflectionMilliseconds);
+    std::printf("wrote         %s (%d atlases, %d light probes, %d reflection probes)\n",
+                outDir.string().c_str(), rt->atlasCount(), relitProbes ? rt->probeCount() : 0,
+                std::max(0, rt->reflectionProbeCount() - 1));
     for (const std::string& w : warnings) std::printf("warning       %s\n", w.c_str());
   }
   return kExitOk;

@@ -195,4 +195,118 @@ Result<std::vector<std::string>> attachImageBasedLight(
   return written;
 }
 
+namespace {
+
+// Calls f on every image index a document refers to: textures' sources (glTF's and their
+// extensions', e.g. KHR_texture_basisu, EXT_texture_webp) and EXT_lights_image_based lights'
+// specular faces (all lights, or those `keep` accepts).
+template <class F, class Keep>
+void forEachImageRef(json& doc, F f, Keep keep) {
+  if (doc.contains("textures") && doc["textures"].is_array())
+    for (json& t : doc["textures"]) {
+      if (!t.is_object()) continue;
+      if (t.contains("source") && t["source"].is_number_integer()) f(t["source"]);
+      if (t.contains("extensions") && t["extensions"].is_object())
+        for (auto& [key, ext] : t["extensions"].items())
+          if (ext.is_object() && ext.contains("source") && ext["source"].is_number_integer())
+            f(ext["source"]);
+    }
+  if (!doc.contains("extensions") || !doc["extensions"].is_object() ||
+      !doc["extensions"].contains(kExtLightsImageBased))
+    return;
+  json& lights = doc["extensions"][kExtLightsImageBased]["lights"];
+  if (!lights.is_array()) return;
+  for (size_t i = 0; i < lights.size(); ++i) {
+    if (!keep(i) || !lights[i].is_object() || !lights[i].contains("specularImages")) continue;
+    for (json& mip : lights[i]["specularImages"])
+      if (mip.is_array())
+        for (json& face : mip)
+          if (face.is_number_integer()) f(face);
+  }
+}
+
+}  // namespace
+
+size_t detachImageBasedLights(json& doc, const std::string& name) {
+  if (!doc.is_object() || !doc.contains("extensions") || !doc["extensions"].is_object() ||
+      !doc["extensions"].contains(kExtLightsImageBased))
+    return 0;
+  json& ext = doc["extensions"][kExtLightsImageBased];
+  if (!ext.is_object() || !ext.contains("lights") || !ext["lights"].is_array()) return 0;
+  json& lights = ext["lights"];
+  std::vector<uint8_t> removed(lights.size(), 0);
+  size_t count = 0;
+  for (size_t i = 0; i < lights.size(); ++i)
+    if (lights[i].is_object() && lights[i].value("name", std::string()) == name)
+      removed[i] = 1, ++count;
+  if (count == 0) return 0;
+
+  // The images the removed lights use that nothing else does.
+  const size_t imageCount = doc.contains("images") && doc["images"].is_array() ? doc["images"].size() : 0;
+  std::vector<uint8_t> used(imageCount, 0), kept(imageCount, 0);
+  auto mark = [&](std::vector<uint8_t>& into) {
+    return [&into](json& ref) {
+      const long long i = ref.get<long long>();
+      if (i >= 0 && size_t(i) < into.size()) into[size_t(i)] = 1;
+    };
+  };
+  forEachImageRef(doc, mark(used), [&](size_t light) { return removed[light] != 0; });
+  // Textures are visited whatever `keep` says: only lights are filtered.
+  forEachImageRef(doc, mark(kept), [&](size_t light) { return removed[light] == 0; });
+  std::vector<long long> newIndex(imageCount, -1);
+  long long next = 0;
+  for (size_t i = 0; i < imageCount; ++i)
+    if (!used[i] || kept[i]) newIndex[i] = next++;
+
+  // Drop the lights and renumber the scenes' pointers.
+  std::vector<long long> newLight(lights.size(), -1);
+  json remaining = json::array();
+  for (size_t i = 0; i < lights.size(); ++i)
+    if (!removed[i]) {
+      newLight[i] = (long long)remaining.size();
+      remaining.push_back(std::move(lights[i]));
+    }
+  lights = std::move(remaining);
+  if (doc.contains("scenes") && doc["scenes"].is_array())
+    for (json& scene : doc["scenes"]) {
+      if (!scene.is_object() || !scene.contains("extensions") || !scene["extensions"].is_object() ||
+          !scene["extensions"].contains(kExtLightsImageBased))
+        continue;
+      json& ref = scene["extensions"][kExtLightsImageBased];
+      const long long old = ref.is_object() && ref.contains("light") && ref["light"].is_number_integer()
+                                ? ref["light"].get<long long>() : -1;
+      if (old >= 0 && size_t(old) < newLight.size() && newLight[size_t(old)] >= 0) {
+        ref["light"] = newLight[size_t(old)];
+      } else {
+        scene["extensions"].erase(kExtLightsImageBased);
+        if (scene["extensions"].empty()) scene.erase("extensions");
+      }
+    }
+
+  // Renumber what still refers to images (the remaining lights included), then drop them.
+  forEachImageRef(doc, [&](json& ref) {
+    const long long i = ref.get<long long>();
+    if (i >= 0 && size_t(i) < newIndex.size()) ref = newIndex[size_t(i)];
+  }, [](size_t) { return true; });
+  if (imageCount > 0) {
+    json images = json::array();
+    for (size_t i = 0; i < imageCount; ++i)
+      if (newIndex[i] >= 0) images.push_back(std::move(doc["images"][i]));
+    doc["images"] = std::move(images);
+    if (doc["images"].empty()) doc.erase("images");
+  }
+
+  if (lights.empty()) {
+    doc["extensions"].erase(kExtLightsImageBased);
+    if (doc["extensions"].empty()) doc.erase("extensions");
+    if (doc.contains("extensionsUsed") && doc["extensionsUsed"].is_array()) {
+      json& extUsed = doc["extensionsUsed"];
+      extUsed.erase(std::remove(extUsed.begin(), extUsed.end(), json(kExtLightsImageBased)),
+                    extUsed.end());
+      if (extUsed.empty()) doc.erase("extensionsUsed");
+    }
+  }
+  return count;
+}
+
 }  // namespace afterglow::baker

@@ -1,6 +1,7 @@
-// The bake's reflection-probe outputs (README: reflection probes): each probe's prefiltered
-// chain as an OpenEXR cube environment map, the split sum's DFG table, their description in
-// OUT/probes/reflection_probes.json, and the sky as EXT_lights_image_based in the glTF.
+// The reflection-probe outputs of a bake and of `afterglow relight` (README: reflection probes):
+// each probe's prefiltered chain as an OpenEXR cube environment map, the split sum's DFG table,
+// their description in probes/reflection_probes.json, and the sky as EXT_lights_image_based in
+// the glTF.
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
@@ -34,13 +35,24 @@ std::vector<runtime::Cubemap> fileMips(const runtime::CubemapChain& chain) {
 
 Status writeReflectionOutputs(const BakeResult& result, const std::string& outDir, json& gltf,
                               AtomicOutput& out, std::vector<std::string>& written) {
-  const std::vector<runtime::CubemapChain>& chains = result.reflectionChains;
-  const runtime::ReflectionTransport& refl = result.transport.reflections;
-  if (chains.empty() || chains.size() != refl.count() + 1) return Status::ok();
+  return writeReflectionOutputs(result.transport, result.reflectionChains, result.dfg, outDir,
+                                gltf, out, written);
+}
+
+Status writeReflectionOutputs(const runtime::TransportData& transport,
+                              const std::vector<runtime::CubemapChain>& chains,
+                              const std::vector<glm::vec2>& dfg, const std::string& outDir,
+                              json& gltf, AtomicOutput& out, std::vector<std::string>& written) {
+  const runtime::ReflectionTransport& refl = transport.reflections;
+  if (chains.empty() && refl.count() == 0) return Status::ok();
+  // A caller's mistake, not the user's: say so rather than write a partial set.
+  if (chains.size() != refl.count() + 1)
+    return Status::error(format("%s: internal error: %zu reflection chains for %zu probes and the sky",
+                                outDir.c_str(), chains.size(), refl.count()));
   const fs::path dir = fs::path(outDir) / "probes";
 
   const std::string dfgPath = (dir / "dfg.exr").string();
-  if (Status s = writeDfgExr(dfgPath, result.dfg, runtime::kDfgSize, out); !s) return s;
+  if (Status s = writeDfgExr(dfgPath, dfg, runtime::kDfgSize, out); !s) return s;
   written.push_back(dfgPath);
 
   json probes = json::array();
@@ -96,11 +108,14 @@ Status writeReflectionOutputs(const BakeResult& result, const std::string& outDi
   if (Status s = out.write(jsonPath, doc.dump(1) + "\n"); !s) return s;
   written.push_back(jsonPath);
 
-  // The sky for standard viewers.
+  // The sky for standard viewers, replacing the one the glTF may already have (a relight's
+  // document is the bake's scene.gltf, its sky the baked one; the bake's own export has none).
   runtime::ShL2 sky;
-  for (int k = 0; k < runtime::kShCount; ++k) sky.c[k] = result.transport.skySh[k];
+  for (int k = 0; k < runtime::kShCount; ++k) sky.c[k] = transport.skySh[k];
+  const ImageBasedLightOptions iblOptions;
+  detachImageBasedLights(gltf, iblOptions.name);
   Result<std::vector<std::string>> images =
-      attachImageBasedLight(gltf, outDir, sky, fileMips(chains[0]), out);
+      attachImageBasedLight(gltf, outDir, sky, fileMips(chains[0]), out, iblOptions);
   if (!images) return images.status();
   written.insert(written.end(), images->begin(), images->end());
   return Status::ok();

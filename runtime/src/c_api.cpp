@@ -1,5 +1,7 @@
 // The C API (afterglow_runtime.h) over Runtime. No exception crosses it: load() turns
-// std::bad_alloc into an error message; nothing else here throws.
+// std::bad_alloc into an error message, and the calls that allocate since reflection probes
+// (update and update_reflection_probes build new cubemaps, reflection_probes_at its list)
+// return 0 on it; nothing else here throws.
 #include "afterglow_runtime.h"
 
 #include <algorithm>
@@ -8,7 +10,9 @@
 #include <memory>
 #include <new>
 #include <string>
+#include <vector>
 
+#include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/runtime.h"
 
 using afterglow::runtime::Runtime;
@@ -40,6 +44,7 @@ void afterglow_runtime_default_options(AfterglowUpdateOptions* options) {
   options->time_budget_ms = defaults.timeBudgetMs;
   options->from_scratch = defaults.fromScratch ? 1 : 0;
   options->probes = defaults.probes ? 1 : 0;
+  options->reflection_passes = defaults.reflectionPasses;
 }
 
 AfterglowRuntime* afterglow_runtime_load(const char* path, char* err, size_t err_size) {
@@ -144,6 +149,8 @@ void copyStats(const afterglow::runtime::UpdateStats& s, AfterglowUpdateStats* s
   stats->milliseconds = s.milliseconds;
   stats->probes = s.probes;
   stats->probe_milliseconds = s.probeMilliseconds;
+  stats->reflection_passes = s.reflectionPasses;
+  stats->reflection_milliseconds = s.reflectionMilliseconds;
 }
 }  // namespace
 
@@ -157,8 +164,13 @@ int afterglow_runtime_update(AfterglowRuntime* rt, const AfterglowUpdateOptions*
     o.timeBudgetMs = options->time_budget_ms;
     o.fromScratch = options->from_scratch != 0;
     o.probes = options->probes != 0;
+    o.reflectionPasses = options->reflection_passes;
   }
-  copyStats(rt->runtime->update(o), stats);
+  try {
+    copyStats(rt->runtime->update(o), stats);
+  } catch (const std::bad_alloc&) {
+    return 0;  // the reflection probes' passes allocate their cubemaps
+  }
   return 1;
 }
 
@@ -208,6 +220,129 @@ int afterglow_runtime_update_probes(AfterglowRuntime* rt, double budget_ms,
                                     AfterglowUpdateStats* stats) {
   if (!rt) return 0;
   copyStats(rt->runtime->updateProbes(budget_ms), stats);
+  return 1;
+}
+
+// ---- Reflection probes ------------------------------------------------------------------------
+
+namespace {
+
+using afterglow::runtime::ReflectionProbeBox;
+
+void copyVec3(glm::vec3 v, float* out) { out[0] = v.x, out[1] = v.y, out[2] = v.z; }
+glm::vec3 vec3Of(const float* v) { return glm::vec3(v[0], v[1], v[2]); }
+
+// Field by field both ways, so the C box and ReflectionProbeBox need not share a layout.
+void boxToC(const ReflectionProbeBox& b, AfterglowReflectionProbeBox* out) {
+  copyVec3(b.centre, out->centre);
+  for (int k = 0; k < 3; ++k) copyVec3(b.axes[k], out->axes + 3 * k);
+  copyVec3(b.halfSize, out->half_size);
+  out->blend_distance = b.blendDistance;
+  out->importance = b.importance;
+  out->box_projection = b.boxProjection ? 1 : 0;
+  copyVec3(b.capturePosition, out->capture_position);
+  copyVec3(b.projectionCentre, out->projection_centre);
+  copyVec3(b.projectionHalfSize, out->projection_half_size);
+}
+
+ReflectionProbeBox boxFromC(const AfterglowReflectionProbeBox& b) {
+  ReflectionProbeBox out;
+  out.centre = vec3Of(b.centre);
+  for (int k = 0; k < 3; ++k) out.axes[k] = vec3Of(b.axes + 3 * k);
+  out.halfSize = vec3Of(b.half_size);
+  out.blendDistance = b.blend_distance;
+  out.importance = b.importance;
+  out.boxProjection = b.box_projection != 0;
+  out.capturePosition = vec3Of(b.capture_position);
+  out.projectionCentre = vec3Of(b.projection_centre);
+  out.projectionHalfSize = vec3Of(b.projection_half_size);
+  return out;
+}
+
+}  // namespace
+
+int afterglow_runtime_reflection_probe_count(const AfterglowRuntime* rt) {
+  return rt ? rt->runtime->reflectionProbeCount() : 0;
+}
+
+int afterglow_runtime_reflection_mip_count(const AfterglowRuntime* rt) {
+  return rt ? rt->runtime->reflectionMipCount() : 0;
+}
+
+int afterglow_runtime_reflection_face_size(const AfterglowRuntime* rt, int probe, int mip) {
+  return rt ? rt->runtime->reflectionFaceSize(probe, mip) : 0;
+}
+
+int afterglow_runtime_read_cubemap(const AfterglowRuntime* rt, int probe, int mip, int face,
+                                   float* rgb, size_t float_count) {
+  if (!rt || !rgb) return 0;
+  const size_t size = size_t(rt->runtime->reflectionFaceSize(probe, mip));
+  if (size == 0 || float_count < size * size * 3) return 0;
+  return rt->runtime->readCubemap(probe, mip, face, rgb);
+}
+
+float afterglow_runtime_reflection_mip_of_roughness(const AfterglowRuntime* rt, float r) {
+  if (!rt || rt->runtime->reflectionMipCount() == 0) return 0.0f;
+  return afterglow::runtime::mipOfRoughness(r, rt->runtime->reflectionMipCount());
+}
+
+int afterglow_runtime_reflection_probes_at(const AfterglowRuntime* rt, float x, float y, float z,
+                                           int* probes, float* weights, int capacity) {
+  if (!rt || (capacity > 0 && (!probes || !weights))) return 0;
+  std::vector<afterglow::runtime::ProbeWeight> found;
+  try {
+    found = rt->runtime->reflectionProbesAt(glm::vec3(x, y, z));
+  } catch (const std::bad_alloc&) {
+    return 0;
+  }
+  for (size_t i = 0; i < found.size() && capacity > 0 && i < size_t(capacity); ++i) {
+    probes[i] = found[i].probe;
+    weights[i] = found[i].weight;
+  }
+  return int(found.size());
+}
+
+int afterglow_runtime_reflection_probe_box(const AfterglowRuntime* rt, int probe,
+                                           AfterglowReflectionProbeBox* box) {
+  if (!rt || !box) return 0;
+  const ReflectionProbeBox* b = rt->runtime->reflectionProbeBox(probe);
+  if (!b) return 0;
+  boxToC(*b, box);
+  return 1;
+}
+
+int afterglow_runtime_box_project(const AfterglowReflectionProbeBox* box, float px, float py,
+                                  float pz, float dx, float dy, float dz, float* xyz) {
+  if (!box || !xyz) return 0;
+  copyVec3(afterglow::runtime::boxProject(boxFromC(*box), glm::vec3(px, py, pz),
+                                          glm::vec3(dx, dy, dz)),
+           xyz);
+  return 1;
+}
+
+int afterglow_runtime_dfg_size(const AfterglowRuntime* rt) {
+  return rt && !rt->runtime->dfgTable().empty() ? afterglow::runtime::kDfgSize : 0;
+}
+
+int afterglow_runtime_read_dfg(const AfterglowRuntime* rt, float* scale_bias, size_t float_count) {
+  if (!rt || !scale_bias) return 0;
+  const std::vector<glm::vec2>& table = rt->runtime->dfgTable();
+  if (table.empty() || float_count < table.size() * 2) return 0;
+  for (size_t i = 0; i < table.size(); ++i) {
+    scale_bias[2 * i] = table[i].x;
+    scale_bias[2 * i + 1] = table[i].y;
+  }
+  return 1;
+}
+
+int afterglow_runtime_update_reflection_probes(AfterglowRuntime* rt, int passes, double budget_ms,
+                                               AfterglowUpdateStats* stats) {
+  if (!rt) return 0;
+  try {
+    copyStats(rt->runtime->updateReflectionProbes(passes, budget_ms), stats);
+  } catch (const std::bad_alloc&) {
+    return 0;
+  }
   return 1;
 }
 

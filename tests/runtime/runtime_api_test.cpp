@@ -15,6 +15,8 @@
 #include <thread>
 #include <vector>
 
+#include "afterglow/runtime/reflection_capture.h"
+#include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/runtime/transport_file.h"
@@ -59,6 +61,9 @@ extern "C" int afterglow_test_c_relight(const char* path, float* rgb, size_t flo
                                         char* err, size_t err_size);
 extern "C" int afterglow_test_c_load_fails(const char* path, char* err, size_t err_size);
 extern "C" int afterglow_test_c_probes(const char* path, float* out);
+extern "C" int afterglow_test_c_reflections(const char* path, float* cube, float* projected,
+                                            int* probes, float* weights, int* count,
+                                            AfterglowReflectionProbeBox* box);
 
 namespace afterglow::runtime {
 namespace {
@@ -189,6 +194,63 @@ TransportData makeScene(uint32_t scale = 1, uint64_t seed = 7) {
   for (uint32_t k = 0; k < 5 * kProbeSkyCount; ++k) probes.sky.push_back(floatToHalf(rng.unit() - 0.4f));
   for (Source& s : d.sources)
     for (uint32_t k = 0; k < 5 * kShCount; ++k) s.probeTransfer.push_back(rng.unit() - 0.2f);
+  EXPECT_EQ(d.validate(), "");
+  return d;
+}
+
+// makeScene with two reflection probes of 2² and 4² texels a face and two bounces: overlapping
+// turned boxes around (0.5, 0.5, 0.5) (the second more important, fading in there, with a
+// projection box of its own), whose capture rays hit random points of the scene's materials and atlases facing the
+// probe, a quarter of them missing (the sky).
+TransportData withReflections(TransportData d, uint64_t seed = 11) {
+  Rng rng{seed};
+  ReflectionTransport& r = d.reflections;
+  r.bounces = 2;
+  for (const MaterialParams& m : d.materials) r.bakedAlbedo.push_back(m.albedo);
+  for (uint32_t side : {2u, 4u}) {
+    ReflectionProbeCapture c;
+    c.name = "probe" + std::to_string(side);
+    c.resolution = side;
+    c.firstHit = r.hits.size();
+    c.box.centre = glm::vec3(0.3f + 0.4f * rng.unit(), 0.3f + 0.4f * rng.unit(), 0.5f);
+    c.box.axes = glm::mat3(glm::vec3(0, 0, 1), glm::vec3(0, 1, 0), glm::vec3(-1, 0, 0));
+    c.box.halfSize = glm::vec3(1.0f + rng.unit(), 2.0f, 1.5f);
+    c.box.blendDistance = 0.8f;
+    c.box.importance = int(side);
+    c.box.capturePosition = c.box.centre + glm::vec3(0.1f);
+    if (side == 4) {
+      // Smaller, so that (0.5, 0.5, 0.5) lies in its blend region, 0.5 inside its z = 0 face:
+      // the two probes share that point.
+      c.box.centre = glm::vec3(0.5f, 0.5f, 1.0f);
+      c.box.halfSize = glm::vec3(1.0f);
+      c.box.capturePosition = c.box.centre + glm::vec3(0.1f);
+      c.box.projectionCentre = c.box.centre - glm::vec3(0.2f);
+      c.box.projectionHalfSize = c.box.halfSize * 0.5f;
+    }
+    r.probes.push_back(c);
+    for (int face = 0; face < kCubeFaceCount; ++face)
+      for (uint32_t y = 0; y < side; ++y)
+        for (uint32_t x = 0; x < side; ++x) {
+          ReflectionHit h;
+          if (rng.below(4) != 0) {
+            const glm::vec3 ray = cubemapTexelDirection(face, int(x), int(y), int(side));
+            const glm::vec3 normal = glm::normalize(
+                -ray + 0.5f * glm::vec3(rng.unit() - 0.5f, rng.unit() - 0.5f, rng.unit() - 0.5f));
+            h.material = rng.below(uint32_t(d.materials.size()));
+            h.atlas = uint16_t(rng.below(uint32_t(d.atlases.size())));
+            h.roughness = floatToHalf(rng.unit());
+            h.lightmapUv = glm::vec2(rng.unit(), rng.unit());
+            for (int k = 0; k < 3; ++k) {
+              h.diffuse[k] = floatToHalf(0.8f * rng.unit());
+              h.emission[k] = floatToHalf(rng.below(2) ? 1.0f : 0.0f);
+              h.f0[k] = floatToHalf(0.04f + 0.9f * rng.unit());
+              h.normal[k] = floatToHalf(normal[k]);
+            }
+            h.distance = 0.5f + rng.unit();
+          }
+          r.hits.push_back(h);
+        }
+  }
   EXPECT_EQ(d.validate(), "");
   return d;
 }
@@ -778,6 +840,139 @@ TEST(RuntimeApi, CApiMatchesTheCppApi) {
   }
   EXPECT_EQ(afterglow_runtime_light_count(nullptr), 0);
   EXPECT_EQ(afterglow_runtime_update(nullptr, nullptr, nullptr), 0);
+}
+
+// The reflection probe calls through C: the same cubemaps (equal to the bake's own
+// solveReflectionProbes from the same lightmaps), probes and weights, boxes and box projection
+// as through C++, and weights that sum to 1 everywhere.
+TEST(RuntimeApi, CApiReflectionProbesMatchTheCppApi) {
+  const std::string path = tempPath("afterglow_runtime_api_c_reflections.agt");
+  std::string error;
+  ASSERT_TRUE(saveTransport(withReflections(makeScene()), path, &error)) << error;
+  auto rt = Runtime::load(path, &error);
+  ASSERT_TRUE(rt) << error;
+  rt->setSky(glm::vec3(0.1f, 0.2f, 0.3f));
+  const UpdateStats stats = rt->update(scratch(4));
+  EXPECT_EQ(stats.reflectionPasses, 6);
+
+  float cube[51], projected[3] = {};
+  int probes[4] = {-1, -1, -1, -1}, count = 0;
+  float weights[4] = {};
+  AfterglowReflectionProbeBox box{};
+  EXPECT_EQ(afterglow_test_c_reflections(path.c_str(), cube, projected, probes, weights, &count,
+                                         &box), 1);
+
+  // The cubemaps: C's equal C++'s, bit for bit, which equal the bake's function's.
+  float want[48], wantMip1[3];
+  ASSERT_TRUE(rt->readCubemap(2, 0, 3, want));
+  ASSERT_TRUE(rt->readCubemap(1, 1, 0, wantMip1));
+  EXPECT_EQ(std::memcmp(cube, want, sizeof want), 0);
+  EXPECT_EQ(std::memcmp(cube + 48, wantMip1, sizeof wantMip1), 0);
+  const std::vector<CubemapChain> baked =
+      solveReflectionProbes(rt->data(), atlases(*rt), rt->dfgTable(), kDfgSize);
+  ASSERT_EQ(baked.size(), 3u);
+  for (int k = 0; k < 16; ++k)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(want[3 * k + c], baked[2][0].texels[size_t(3 * 16 + k)][c]) << k;
+  float sum = 0.0f;
+  for (int c = 0; c < 3; ++c) sum += std::abs(want[c]) + std::abs(wantMip1[c]);
+  EXPECT_GT(sum, 0.0f);  // not the black of no update
+
+  // Probes and weights at the point.
+  const std::vector<ProbeWeight> at = rt->reflectionProbesAt(glm::vec3(0.5f));
+  ASSERT_EQ(count, int(at.size()));
+  ASSERT_GE(count, 2);  // inside both boxes: not the sky alone
+  for (int i = 0; i < count; ++i) {
+    EXPECT_EQ(probes[i], at[size_t(i)].probe);
+    EXPECT_EQ(weights[i], at[size_t(i)].weight);
+  }
+
+  // Probe 2's box field by field, and probe 1's box projection.
+  const ReflectionProbeBox& b = *rt->reflectionProbeBox(2);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(box.centre[a], b.centre[a]);
+    EXPECT_EQ(box.half_size[a], b.halfSize[a]);
+    EXPECT_EQ(box.capture_position[a], b.capturePosition[a]);
+    EXPECT_EQ(box.projection_centre[a], b.projectionCentre[a]);
+    EXPECT_EQ(box.projection_half_size[a], b.projectionHalfSize[a]);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(box.axes[3 * k + a], b.axes[k][a]) << k << a;
+  }
+  EXPECT_EQ(box.blend_distance, b.blendDistance);
+  EXPECT_EQ(box.importance, b.importance);
+  EXPECT_EQ(box.box_projection, b.boxProjection ? 1 : 0);
+  const glm::vec3 p = boxProject(*rt->reflectionProbeBox(1), glm::vec3(0.5f), glm::vec3(1, 2, -3));
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(projected[a], p[a]);
+  EXPECT_NEAR(glm::length(p), 1.0f, 1e-5f);  // projected: normalised
+
+  // Through the C handle: weights ≥ 0 summing to 1 at random points in and around the boxes,
+  // and the C box projection of every box equal to C++'s.
+  AfterglowRuntime* c = afterglow_runtime_load(path.c_str(), nullptr, 0);
+  ASSERT_NE(c, nullptr);
+  Rng rng{3};
+  int blended = 0;
+  for (int k = 0; k < 500; ++k) {
+    const glm::vec3 q(4.0f * rng.unit() - 1.5f, 4.0f * rng.unit() - 1.5f, 4.0f * rng.unit() - 1.5f);
+    int ids[3];
+    float w[3];
+    const int n = afterglow_runtime_reflection_probes_at(c, q.x, q.y, q.z, ids, w, 3);
+    ASSERT_GE(n, 1);
+    ASSERT_LE(n, 3);
+    blended += n > 1;
+    double total = 0.0;
+    for (int i = 0; i < n; ++i) {
+      EXPECT_GE(ids[i], 0);
+      EXPECT_LT(ids[i], 3);
+      EXPECT_GT(w[i], 0.0f);
+      total += double(w[i]);
+    }
+    EXPECT_NEAR(total, 1.0, 1e-6) << "at " << q.x << ", " << q.y << ", " << q.z;
+    const glm::vec3 dir(rng.unit() - 0.5f, rng.unit() - 0.5f, rng.unit() - 0.5f);
+    for (int probe = 1; probe <= 2; ++probe) {
+      AfterglowReflectionProbeBox cb;
+      ASSERT_EQ(afterglow_runtime_reflection_probe_box(c, probe, &cb), 1);
+      float out[3];
+      ASSERT_EQ(afterglow_runtime_box_project(&cb, q.x, q.y, q.z, dir.x, dir.y, dir.z, out), 1);
+      const glm::vec3 e = boxProject(*rt->reflectionProbeBox(probe), q, dir);
+      for (int a = 0; a < 3; ++a) EXPECT_EQ(out[a], e[a]);
+    }
+  }
+  EXPECT_GT(blended, 50);  // the points did fall in the boxes
+  // The DFG table as C++ has it.
+  std::vector<float> dfg(size_t(2 * kDfgSize * kDfgSize));
+  ASSERT_EQ(afterglow_runtime_read_dfg(c, dfg.data(), dfg.size()), 1);
+  for (size_t i = 0; i < rt->dfgTable().size(); ++i) {
+    ASSERT_EQ(dfg[2 * i], rt->dfgTable()[i].x);
+    ASSERT_EQ(dfg[2 * i + 1], rt->dfgTable()[i].y);
+  }
+  // A budgeted round through C runs at least one unit and reports it.
+  AfterglowUpdateStats cs{};
+  ASSERT_EQ(afterglow_runtime_update_reflection_probes(c, -1, 1e-6, &cs), 1);
+  EXPECT_EQ(cs.reflection_passes, 1);
+  afterglow_runtime_free(c);
+  std::filesystem::remove(path);
+
+  // Without reflection probes: no probes, no table, the sky alone everywhere, and updates that
+  // run no reflection passes.
+  ASSERT_TRUE(saveTransport(makeScene(), path, &error)) << error;
+  AfterglowRuntime* none = afterglow_runtime_load(path.c_str(), nullptr, 0);
+  ASSERT_NE(none, nullptr);
+  std::filesystem::remove(path);
+  EXPECT_EQ(afterglow_runtime_reflection_probe_count(none), 0);
+  EXPECT_EQ(afterglow_runtime_reflection_mip_count(none), 0);
+  EXPECT_EQ(afterglow_runtime_reflection_face_size(none, 0, 0), 0);
+  EXPECT_EQ(afterglow_runtime_dfg_size(none), 0);
+  int id = -1;
+  float weight = 0.0f;
+  EXPECT_EQ(afterglow_runtime_reflection_probes_at(none, 0.0f, 0.0f, 0.0f, &id, &weight, 1), 1);
+  EXPECT_EQ(id, 0);
+  EXPECT_EQ(weight, 1.0f);
+  AfterglowUpdateOptions options;
+  afterglow_runtime_default_options(&options);
+  options.max_bounces = 1;
+  ASSERT_EQ(afterglow_runtime_update(none, &options, &cs), 1);
+  EXPECT_EQ(cs.reflection_passes, 0);
+  EXPECT_EQ(cs.reflection_milliseconds, 0.0);
+  afterglow_runtime_free(none);
 }
 
 }  // namespace

@@ -37,8 +37,19 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
 // The reflection probes' files (when the bake has any): OUT/probes/reflection_sky.exr and
 // reflection_<i>.exr (OpenEXR cube environment maps, the prefiltered mips as mip levels),
 // OUT/probes/dfg.exr, OUT/probes/reflection_probes.json, and the sky as EXT_lights_image_based
-// in `gltf` (its face images beside it). Paths written are appended to `written`.
+// in `gltf` (its face images beside it), replacing a light of that name `gltf` already has
+// (detachImageBasedLights). Paths written are appended to `written`.
 Status writeReflectionOutputs(const BakeResult& result, const std::string& outDir,
+                              nlohmann::json& gltf, AtomicOutput& out,
+                              std::vector<std::string>& written);
+// The same from a transport's reflection probes (their boxes, names, bounces and the sky SH)
+// and chains: [0] the sky, [i + 1] transport.reflections.probes[i], as BakeResult and
+// runtime::Runtime::reflectionChain have them; dfg is the kDfgSize² table. What `afterglow
+// relight` writes from the runtime, so its files are the bake's for the same cubemaps. Nothing
+// is written without probes (no chains); chains not matching the probes are an error.
+Status writeReflectionOutputs(const runtime::TransportData& transport,
+                              const std::vector<runtime::CubemapChain>& chains,
+                              const std::vector<glm::vec2>& dfg, const std::string& outDir,
                               nlohmann::json& gltf, AtomicOutput& out,
                               std::vector<std::string>& written);
 

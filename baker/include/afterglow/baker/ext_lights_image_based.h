@@ -110,4 +110,13 @@ Result<std::vector<std::string>> attachImageBasedLight(
     const std::vector<runtime::Cubemap>& specularMips, AtomicOutput& out,
     const ImageBasedLightOptions& options = {});
 
+// Removes every EXT_lights_image_based light named `name` from `doc`, so that attaching a new
+// one replaces it (afterglow relight re-lights a bake's scene.gltf, which already holds the
+// bake's sky, and would otherwise list two). Also removes the images only those lights used
+// (renumbering the rest in textures' `source`, their extensions' `source` and the remaining
+// lights' specularImages), the scenes' pointers to them (others renumbered) and, when no light
+// is left, the extension and its extensionsUsed entry. Returns how many lights were removed; a
+// document without the extension is left as it is.
+size_t detachImageBasedLights(nlohmann::json& doc, const std::string& name);
+
 }  // namespace afterglow::baker
