@@ -8,7 +8,6 @@
 //   - the probes' share of the transport.
 #include <algorithm>
 #include <cstdio>
-#include <cstdlib>
 #include <memory>
 #include <string>
 
@@ -76,8 +75,6 @@ int reflectionBakeFigures(const std::string& path, float texelsPerUnit, int thre
     units = std::max(1, s.reflectionPasses);
   }
   const double unitMs = roundMs / double(units);
-  if (std::getenv("AG_UNITS"))
-    for (int k = 0; k < units; ++k) std::printf("unit %d: %.2f ms\n", k, rt->updateReflectionProbes(1).reflectionMilliseconds);
   std::vector<std::vector<glm::vec3>> atlases(size_t(rt->atlasCount()));
   for (int a = 0; a < rt->atlasCount(); ++a) rt->readAtlas(a, atlases[size_t(a)]);
   std::vector<runtime::CubemapChain> chains;
@@ -108,9 +105,6 @@ int reflectionBakeFigures(const std::string& path, float texelsPerUnit, int thre
       const runtime::CubemapChain chain = runtime::reflectionChain(cube);
       prefilterMs = std::min(prefilterMs, 1e3 * secondsSince(s0));
     }
-    if (std::getenv("AG_UNITS"))
-      std::printf("probe %d shade %.2f ms, %.2f lookups a texel\n", p, best,
-                  double(setups[size_t(p)].lookups.size()) / double(setups[size_t(p)].start.size() - 1));
     shadeMs = std::max(shadeMs, best);
   }
 
