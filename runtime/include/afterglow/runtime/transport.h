@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <string>
 #include <utility>
@@ -170,7 +171,32 @@ void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texel
 // IEEE half precision, for the bulky per-texel sky transfer (the lightmaps are half floats
 // anyway). Round to nearest even; no dependence on F16C.
 uint16_t floatToHalf(float value);
-float halfToFloat(uint16_t half);
+// Inline: the reflection probes' capture passes read a few halves for every cubemap texel.
+inline float halfToFloat(uint16_t half) {
+  const uint32_t sign = uint32_t(half & 0x8000u) << 16;
+  const uint32_t exponent = (half >> 10) & 0x1fu;
+  uint32_t mantissa = half & 0x3ffu;
+  uint32_t f;
+  if (exponent == 0) {
+    if (mantissa == 0) {
+      f = sign;
+    } else {  // subnormal: normalise
+      int e = -1;
+      do {
+        ++e;
+        mantissa <<= 1;
+      } while (!(mantissa & 0x400u));
+      f = sign | (uint32_t(127 - 15 - e) << 23) | ((mantissa & 0x3ffu) << 13);
+    }
+  } else if (exponent == 31) {
+    f = sign | 0x7f800000u | (mantissa << 13);
+  } else {
+    f = sign | ((exponent + 127 - 15) << 23) | (mantissa << 13);
+  }
+  float out;
+  std::memcpy(&out, &f, 4);
+  return out;
+}
 
 // The sky transfer of a probe is a symmetric kShCount × kShCount matrix; its upper triangle
 // (row-major, i <= j) is stored.
