@@ -25,19 +25,10 @@ namespace afterglow::baker {
 
 namespace {
 
-// Bilinear between texel centres, clamped at the edges (the bake dilated into the padding).
+// Bilinear between texel centres, clamped at the edges (the bake dilated into the padding):
+// as the reflection probes' capture reads them.
 glm::vec3 fetch(const LightmapImage& lm, glm::vec2 uv) {
-  const float x = uv.x * float(lm.width) - 0.5f, y = uv.y * float(lm.height) - 0.5f;
-  const float fx = std::floor(x), fy = std::floor(y);
-  const float tx = x - fx, ty = y - fy;
-  auto at = [&](int px, int py) {
-    px = std::clamp(px, 0, lm.width - 1);
-    py = std::clamp(py, 0, lm.height - 1);
-    return lm.pixels[size_t(py) * size_t(lm.width) + size_t(px)];
-  };
-  const int x0 = int(fx), y0 = int(fy);
-  return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), tx),
-                  glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), tx), ty);
+  return runtime::sampleClampedBilinear(lm.pixels, lm.width, lm.height, uv);
 }
 
 // Primary rays of a pinhole view, shared by both renders so that the baked and the reference

@@ -16,22 +16,6 @@ glm::vec3 halves(const uint16_t* h) {
   return glm::vec3(halfToFloat(h[0]), halfToFloat(h[1]), halfToFloat(h[2]));
 }
 
-// Bilinear between pixel centres, clamped at the atlas edges (the bake dilated into the
-// padding): what a GPU's linear sampler with clamp-to-edge returns.
-glm::vec3 fetchAtlas(const std::vector<glm::vec3>& image, int width, int height, glm::vec2 uv) {
-  const float x = uv.x * float(width) - 0.5f, y = uv.y * float(height) - 0.5f;
-  const float fx = std::floor(x), fy = std::floor(y);
-  const float tx = x - fx, ty = y - fy;
-  auto at = [&](int px, int py) {
-    px = std::clamp(px, 0, width - 1);
-    py = std::clamp(py, 0, height - 1);
-    return image[size_t(py) * size_t(width) + size_t(px)];
-  };
-  const int x0 = int(fx), y0 = int(fy);
-  return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), tx),
-                  glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), tx), ty);
-}
-
 }  // namespace
 
 std::vector<ReflectionProbeBox> ReflectionTransport::boxes() const {
@@ -120,18 +104,9 @@ glm::vec3 sampleChain(const BorderedChain& chain, const CubeFaceUv& direction,
 glm::vec2 sampleDfg(const std::vector<glm::vec2>& table, int size, float nDotV,
                     float perceptualRoughness) {
   if (size <= 0 || table.size() < size_t(size) * size_t(size)) return glm::vec2(0.0f);
-  const float x = glm::clamp(nDotV, 0.0f, 1.0f) * float(size) - 0.5f;
-  const float y = glm::clamp(perceptualRoughness, 0.0f, 1.0f) * float(size) - 0.5f;
-  const float fx = std::floor(x), fy = std::floor(y);
-  const float tx = x - fx, ty = y - fy;
-  auto at = [&](int i, int j) {
-    i = std::clamp(i, 0, size - 1);
-    j = std::clamp(j, 0, size - 1);
-    return table[size_t(j) * size_t(size) + size_t(i)];
-  };
-  const int x0 = int(fx), y0 = int(fy);
-  return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), tx),
-                  glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), tx), ty);
+  return sampleClampedBilinear(table, size, size,
+                               glm::vec2(glm::clamp(nDotV, 0.0f, 1.0f),
+                                         glm::clamp(perceptualRoughness, 0.0f, 1.0f)));
 }
 
 int reflectionLookups(const std::vector<ReflectionProbeBox>& boxes, glm::vec3 position,
@@ -306,7 +281,8 @@ Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
         glm::vec3 lightmap(0.0f);
         if (h.atlas != kReflectionNoAtlas) {
           const AtlasLayout& layout = data.atlases[h.atlas];
-          lightmap = fetchAtlas(atlases[h.atlas], layout.width, layout.height, h.lightmapUv);
+          lightmap = sampleClampedBilinear(atlases[h.atlas], layout.width, layout.height,
+                                           h.lightmapUv);
           radiance += halves(h.diffuse) * albedoScale[h.material] * lightmap;
         }
         if (previous && setup && setup->start[k] < setup->start[k + 1]) {

@@ -27,6 +27,8 @@
 // "Reflection Bounces"). Probe 0 is the sky: a cubemap of the sky SH, prefiltered like the rest.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -84,6 +86,24 @@ struct ReflectionTransport {
   // Empty when consistent with `materials` materials and `atlases` atlases, else what is wrong.
   std::string validate(size_t materials, size_t atlases) const;
 };
+
+// What a GPU's linear sampler with clamp-to-edge returns from a width × height image (row-major,
+// row 0 at v = 0) at uv: bilinear between pixel centres, edges clamped. The capture reads the
+// lightmaps with it, the split sum its DFG table, `afterglow render` the lightmaps too.
+template <class T>
+T sampleClampedBilinear(const std::vector<T>& image, int width, int height, glm::vec2 uv) {
+  const float x = uv.x * float(width) - 0.5f, y = uv.y * float(height) - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float tx = x - fx, ty = y - fy;
+  auto at = [&](int px, int py) {
+    px = std::clamp(px, 0, width - 1);
+    py = std::clamp(py, 0, height - 1);
+    return image[size_t(py) * size_t(width) + size_t(px)];
+  };
+  const int x0 = int(fx), y0 = int(fy);
+  return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), tx),
+                  glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), tx), ty);
+}
 
 // A probe's prefiltered radiance: mips 0.. of reflection_prefilter.h's chain.
 using CubemapChain = std::vector<Cubemap>;
