@@ -304,10 +304,7 @@ Result<BakedReflections> loadBakedReflections(const std::string& gltfPath) {
     return Status::error(dfgPath + format(": %dx%d, the DFG table is %dx%d", dfg->width,
                                           dfg->height, runtime::kDfgSize, runtime::kDfgSize));
   for (const glm::vec3& v : dfg->pixels) out.dfg.emplace_back(v.x, v.y);
-  for (const runtime::CubemapChain& c : out.chains) {
-    out.sh.push_back(runtime::chainIrradianceSh(c));
-    out.bordered.push_back(runtime::withBorders(c));
-  }
+  for (const runtime::CubemapChain& c : out.chains) out.lights.push_back(runtime::probeLight(c));
   return out;
 }
 

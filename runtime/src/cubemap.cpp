@@ -184,18 +184,21 @@ glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, glm::vec3 dir) {
 
 glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, const CubeFaceUv& p) {
   if (cube.size <= 0) return glm::vec3(0.0f);
-  const int n = cube.size, m = n + 2;
+  return sampleBordered(cube, borderedBilinear(cube.size, p));
+}
+
+BorderedBilinear borderedBilinear(int size, const CubeFaceUv& p) {
+  const int n = size, m = n + 2;
   const float fx = p.u * float(n) - 0.5f;
   const float fy = p.v * float(n) - 0.5f;
   // In [-1, n - 1] (u, v in [0, 1]); clamped against rounding at u = 1.
   const int x0 = std::clamp(int(std::floor(fx)), -1, n - 1);
   const int y0 = std::clamp(int(std::floor(fy)), -1, n - 1);
-  const float wx = fx - float(x0);
-  const float wy = fy - float(y0);
-  const glm::vec3* row = cube.texels.data() + (size_t(p.face) * size_t(m) + size_t(y0 + 1)) * size_t(m) + size_t(x0 + 1);
-  const glm::vec3 top = glm::mix(row[0], row[1], wx);
-  const glm::vec3 bottom = glm::mix(row[m], row[m + 1], wx);
-  return glm::mix(top, bottom, wy);
+  BorderedBilinear b;
+  b.wx = fx - float(x0);
+  b.wy = fy - float(y0);
+  b.index = uint32_t((size_t(p.face) * size_t(m) + size_t(y0 + 1)) * size_t(m) + size_t(x0 + 1));
+  return b;
 }
 
 int cubemapBilinearTaps(int size, glm::vec3 dir, CubemapTap* taps) {

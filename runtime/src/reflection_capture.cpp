@@ -84,23 +84,6 @@ BorderedChain withBorders(const CubemapChain& chain) {
   return out;
 }
 
-glm::vec3 sampleChain(const BorderedChain& chain, glm::vec3 direction, float perceptualRoughness) {
-  return sampleChain(chain, cubemapFaceUv(direction), perceptualRoughness);
-}
-
-glm::vec3 sampleChain(const BorderedChain& chain, const CubeFaceUv& direction,
-                      float perceptualRoughness) {
-  if (chain.empty()) return glm::vec3(0.0f);
-  const int mips = int(chain.size());
-  const float mip = std::min(mipOfRoughness(perceptualRoughness, kReflectionMipCount),
-                             float(mips - 1));
-  const int level = std::min(int(mip), mips - 1);
-  const glm::vec3 a = sampleBorderedCubemap(chain[size_t(level)], direction);
-  const float f = mip - float(level);
-  if (f <= 0.0f || level + 1 >= mips) return a;
-  return glm::mix(a, sampleBorderedCubemap(chain[size_t(level + 1)], direction), f);
-}
-
 glm::vec2 sampleDfg(const std::vector<glm::vec2>& table, int size, float nDotV,
                     float perceptualRoughness) {
   if (size <= 0 || table.size() < size_t(size) * size_t(size)) return glm::vec2(0.0f);
@@ -141,31 +124,68 @@ int reflectionLookups(const std::vector<ReflectionProbeBox>& boxes, glm::vec3 po
     l.reflected = box ? glm::normalize(glm::mix(boxProject(*box, position, dominant), dominant, alpha))
                       : dominant;
     l.normal = box ? boxProject(*box, position, normal) : normal;
-    l.at = cubemapFaceUv(l.reflected);
   }
   return count;
 }
 
-glm::vec3 ReflectionLighting::radiance(const ReflectionLookup* lookups, int count,
+ProbeLight probeLight(const CubemapChain& chain) {
+  ProbeLight light;
+  if (chain.empty()) return light;
+  light.mips = withBorders(chain);
+  const ShL2 sh = chainIrradianceSh(chain);
+  Cubemap irradiance = makeCubemap(kProbeIrradianceSize);
+  for (int face = 0; face < kCubeFaceCount; ++face)
+    for (int y = 0; y < kProbeIrradianceSize; ++y)
+      for (int x = 0; x < kProbeIrradianceSize; ++x)
+        irradiance.at(face, x, y) = glm::max(
+            irradianceOverPi(sh, cubemapTexelDirection(face, x, y, kProbeIrradianceSize)),
+            glm::vec3(0.0f));
+  light.irradiance = withBorder(irradiance);
+  return light;
+}
+
+ReflectionTap reflectionTap(const ReflectionLookup& lookup, float perceptualRoughness,
+                            int faceSize, int mips) {
+  ReflectionTap tap;
+  tap.probe = uint16_t(lookup.probe);
+  // sampleChain's mips and fraction.
+  const float mip = std::min(mipOfRoughness(glm::clamp(perceptualRoughness, 0.0f, 1.0f),
+                                            kReflectionMipCount),
+                             float(mips - 1));
+  const int level = std::clamp(int(mip), 0, mips - 1);
+  const float f = level + 1 < mips ? std::max(mip - float(level), 0.0f) : 0.0f;
+  const int next = f > 0.0f ? level + 1 : level;
+  tap.level[0] = uint8_t(level);
+  tap.level[1] = uint8_t(next);
+  const CubeFaceUv at = cubemapFaceUv(lookup.reflected);
+  tap.at[0] = borderedBilinear(std::max(1, faceSize >> level), at);
+  tap.at[1] = borderedBilinear(std::max(1, faceSize >> next), at);
+  tap.weight[0] = lookup.weight * (1.0f - f);
+  tap.weight[1] = lookup.weight * f;
+  tap.irradiance = borderedBilinear(kProbeIrradianceSize, cubemapFaceUv(lookup.normal));
+  return tap;
+}
+
+glm::vec3 ReflectionLighting::radiance(const ReflectionTap* taps, int count,
                                        float perceptualRoughness, const glm::vec3* lightmap) const {
   const float r = glm::clamp(perceptualRoughness, 0.0f, 1.0f);
   glm::vec3 radiance(0.0f), irradiance(0.0f);
   for (int k = 0; k < count; ++k) {
-    const ReflectionLookup& l = lookups[k];
-    if (size_t(l.probe) >= chains->size()) continue;
-    radiance += l.weight * (bordered ? sampleChain((*bordered)[size_t(l.probe)], l.at, r)
-                                     : sampleChain((*chains)[size_t(l.probe)], l.reflected, r));
-    if (lightmap && irradianceSh && size_t(l.probe) < irradianceSh->size())
-      irradiance += l.weight * glm::max(irradianceOverPi((*irradianceSh)[size_t(l.probe)], l.normal),
-                                        glm::vec3(0.0f));
+    const ReflectionTap& t = taps[k];
+    if (size_t(t.probe) >= lights->size()) continue;
+    const ProbeLight& light = (*lights)[t.probe];
+    if (size_t(t.level[1]) >= light.mips.size()) continue;  // no chain yet: black
+    radiance += t.weight[0] * sampleBordered(light.mips[t.level[0]], t.at[0]) +
+                t.weight[1] * sampleBordered(light.mips[t.level[1]], t.at[1]);
+    if (lightmap) irradiance += (t.weight[0] + t.weight[1]) * sampleBordered(light.irradiance, t.irradiance);
   }
   // 3. Normalisation by the lightmap: the probes saw the room from their capture position, the
   //    lightmap saw it from the surface; scaling a rough reflection by the ratio of the two
   //    irradiances (by roughness: a mirror keeps its probe's image) puts back the surface's own
-  //    occlusion. The probes' irradiance is their radiance SH's (chainIrradianceSh) in the
+  //    occlusion. The probes' irradiance is their radiance SH's (ProbeLight) in the
   //    box-projected normal. The ratio is clamped to [0, 4] against a probe that saw nearly
   //    nothing.
-  if (lightmap && irradianceSh)
+  if (lightmap)
     for (int c = 0; c < 3; ++c) {
       const float ratio =
           irradiance[c] > 1e-8f ? std::min((*lightmap)[c] / irradiance[c], 4.0f) : 1.0f;
@@ -177,13 +197,22 @@ glm::vec3 ReflectionLighting::radiance(const ReflectionLookup* lookups, int coun
 glm::vec3 ReflectionLighting::specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
                                        glm::vec3 f0, float perceptualRoughness,
                                        const glm::vec3* lightmap) const {
-  if (!boxes || !chains || !dfg || chains->empty()) return glm::vec3(0.0f);
+  if (!boxes || !lights || !dfg || lights->empty()) return glm::vec3(0.0f);
   if (f0 == glm::vec3(0.0f)) return glm::vec3(0.0f);
   ReflectionLookup lookups[kMaxReflectionBlend];
   const int count = reflectionLookups(*boxes, position, normal, toViewer, perceptualRoughness, lookups);
-  if (count == 0) return glm::vec3(0.0f);
+  ReflectionTap taps[kMaxReflectionBlend];
+  int used = 0;
+  for (int k = 0; k < count; ++k) {
+    if (size_t(lookups[k].probe) >= lights->size()) continue;
+    const ProbeLight& light = (*lights)[size_t(lookups[k].probe)];
+    if (light.empty()) continue;
+    taps[used++] = reflectionTap(lookups[k], perceptualRoughness, light.mips[0].size,
+                                 int(light.mips.size()));
+  }
+  if (used == 0) return glm::vec3(0.0f);
   const glm::vec2 sb = sampleDfg(*dfg, dfgSize, glm::dot(normal, toViewer), perceptualRoughness);
-  return radiance(lookups, count, perceptualRoughness, lightmap) * (f0 * sb.x + sb.y);
+  return radiance(taps, used, perceptualRoughness, lightmap) * (f0 * sb.x + sb.y);
 }
 
 ShL2 chainIrradianceSh(const CubemapChain& chain) {
@@ -228,10 +257,15 @@ ReflectionShadingSetup prepareReflectionShading(const TransportData& data, size_
           if (count > 0) {
             const glm::vec2 sb = sampleDfg(dfg, dfgSize, glm::dot(normal, -dir), roughness);
             setup.specular[k] = f0 * sb.x + sb.y;
-            setup.lookups.insert(setup.lookups.end(), lookups, lookups + count);
+            for (int l = 0; l < count; ++l) {
+              const int faceSize = lookups[l].probe == 0
+                                       ? int(kReflectionSkyResolution)
+                                       : int(refl.probes[size_t(lookups[l].probe - 1)].resolution);
+              setup.taps.push_back(reflectionTap(lookups[l], roughness, faceSize, kReflectionMipCount));
+            }
           }
         }
-        setup.start.push_back(uint32_t(setup.lookups.size()));
+        setup.start.push_back(uint32_t(setup.taps.size()));
       }
   return setup;
 }
@@ -287,7 +321,7 @@ Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
         }
         if (previous && setup && setup->start[k] < setup->start[k + 1]) {
           const uint32_t first = setup->start[k];
-          radiance += previous->radiance(&setup->lookups[first], int(setup->start[k + 1] - first),
+          radiance += previous->radiance(&setup->taps[first], int(setup->start[k + 1] - first),
                                          halfToFloat(h.roughness),
                                          h.atlas != kReflectionNoAtlas ? &lightmap : nullptr) *
                       setup->specular[k];
@@ -313,16 +347,14 @@ std::vector<CubemapChain> solveReflectionProbes(const TransportData& data,
   if (refl.bounces > 0)
     for (size_t i = 0; i < refl.count(); ++i)
       setups.push_back(prepareReflectionShading(data, i, dfg, dfgSize));
+  // The chains a pass reads, as capture passes read them: [0] the sky, [i + 1] probe i.
+  std::vector<ProbeLight> previous(refl.count() + 1);
   for (uint32_t pass = 0; pass <= refl.bounces; ++pass) {
     // Every probe of this pass reads the previous pass's chains, none of this pass's.
-    const std::vector<CubemapChain> previousChains = chains;
-    std::vector<ShL2> sh;
-    std::vector<BorderedChain> bordered;
-    for (const CubemapChain& c : previousChains) {
-      sh.push_back(chainIrradianceSh(c));
-      bordered.push_back(withBorders(c));
-    }
-    ReflectionLighting lighting{&boxes, &previousChains, &dfg, dfgSize, &sh, &bordered};
+    if (pass > 0)
+      for (size_t i = 0; i < chains.size(); ++i)
+        if (pass == 1 || i > 0) previous[i] = probeLight(chains[i]);
+    ReflectionLighting lighting{&boxes, &previous, &dfg, dfgSize};
     for (size_t i = 0; i < refl.count(); ++i)
       chains[i + 1] = reflectionChain(shadeReflectionCapture(
           data, i, atlases, pass == 0 ? nullptr : &lighting, pass == 0 ? nullptr : &setups[i]));

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <chrono>
 
-#include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/runtime.h"
 
@@ -25,6 +24,8 @@ void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point 
   const auto start = std::chrono::steady_clock::now();
   if (reflectionPasses_.empty()) {
     reflectionPasses_.assign(size_t(data_.reflections.bounces) + 1, std::vector<CubemapChain>(probes));
+    // Pass p's chains as pass p + 1 reads them ([0] the sky); the last pass is read by none.
+    reflectionLights_.assign(size_t(data_.reflections.bounces), std::vector<ProbeLight>(probes + 1));
     reflectionBoxes_ = data_.reflections.boxes();
   }
   bool skyChanged = false;
@@ -32,16 +33,14 @@ void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point 
     reflectionSky_ = runtime::reflectionChain(skyCubemap(data_.skySh, int(kReflectionSkyResolution)));
     reflectionSkyStale_ = false;
     skyChanged = true;
+    if (!reflectionLights_.empty()) {
+      const ProbeLight sky = probeLight(reflectionSky_);
+      for (std::vector<ProbeLight>& pass : reflectionLights_) pass[0] = sky;
+    }
   }
   const size_t units = reflectionPasses_.size() * probes;
   size_t todo = passes < 0 ? units : std::min(units, size_t(passes));
   if (passes < 0) reflectionCursor_ = 0;
-  // The chains a pass reads: the sky, then the previous pass's probes (copied per pass into a
-  // scratch array laid out as ReflectionLighting wants, [0] the sky).
-  std::vector<CubemapChain> previous;
-  std::vector<ShL2> previousSh;
-  std::vector<BorderedChain> previousBordered;
-  size_t previousPass = ~size_t(0);
   const std::vector<std::vector<glm::vec3>>& atlases = images_[front_];
   std::vector<uint8_t> published(probes, 0);
   double lastUnitMs = 0.0;
@@ -55,28 +54,19 @@ void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point 
     const ReflectionLighting* lighting = nullptr;
     ReflectionLighting light;
     if (pass > 0) {
-      if (previousPass != pass - 1) {
-        previous.assign(1, reflectionSky_);
-        previous.insert(previous.end(), reflectionPasses_[pass - 1].begin(),
-                        reflectionPasses_[pass - 1].end());
-        previousSh.clear();
-        previousBordered.clear();
-        for (const CubemapChain& c : previous) {
-          previousSh.push_back(chainIrradianceSh(c));
-          previousBordered.push_back(withBorders(c));
-        }
-        previousPass = pass - 1;
-      }
-      light = ReflectionLighting{&reflectionBoxes_, &previous, &dfg_, kDfgSize, &previousSh,
-                                 &previousBordered};
+      light = ReflectionLighting{&reflectionBoxes_, &reflectionLights_[pass - 1], &dfg_, kDfgSize};
       lighting = &light;
       // The static half of the probe's specular lookups, built on its first bounce pass.
       if (reflectionSetups_.size() < probes) reflectionSetups_.resize(probes);
       if (reflectionSetups_[probe].start.empty())
         reflectionSetups_[probe] = prepareReflectionShading(data_, probe, dfg_, kDfgSize);
     }
-    reflectionPasses_[pass][probe] = runtime::reflectionChain(shadeReflectionCapture(
+    CubemapChain& chain = reflectionPasses_[pass][probe];
+    chain = runtime::reflectionChain(shadeReflectionCapture(
         data_, probe, atlases, lighting, lighting ? &reflectionSetups_[probe] : nullptr));
+    // The next pass reads this chain as it is read (bordered, with its irradiance): made once
+    // here rather than by every unit of the next pass.
+    if (pass < reflectionLights_.size()) reflectionLights_[pass][probe + 1] = probeLight(chain);
     if (pass + 1 == reflectionPasses_.size()) published[probe] = 1;
     reflectionCursor_ = (reflectionCursor_ + 1) % units;
     ++stats.reflectionPasses;

@@ -77,12 +77,9 @@ struct BakedReflections {
   std::vector<runtime::ReflectionProbeBox> boxes;  // probe i + 1's
   std::vector<runtime::CubemapChain> chains;       // [0] the sky, [i + 1] boxes[i]
   std::vector<glm::vec2> dfg;                      // kDfgSize² (scale, bias)
-  std::vector<runtime::ShL2> sh;                   // per chain, chainIrradianceSh
-  std::vector<runtime::BorderedChain> bordered;    // per chain, withBorders
+  std::vector<runtime::ProbeLight> lights;         // per chain, probeLight
   bool empty() const { return chains.empty(); }
-  runtime::ReflectionLighting lighting() const {
-    return {&boxes, &chains, &dfg, runtime::kDfgSize, &sh, &bordered};
-  }
+  runtime::ReflectionLighting lighting() const { return {&boxes, &lights, &dfg, runtime::kDfgSize}; }
 };
 Result<BakedReflections> loadBakedReflections(const std::string& gltfPath);
 

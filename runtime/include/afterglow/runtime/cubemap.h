@@ -126,6 +126,23 @@ glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, glm::vec3 dir);
 // several mips.
 glm::vec3 sampleBorderedCubemap(const BorderedCubemap& cube, const CubeFaceUv& p);
 
+// Where sampleBorderedCubemap reads on a bordered cube of face `size`: the top-left texel of
+// its 2 × 2 square (texels[index], [index + 1], [index + m], [index + m + 1], m = size + 2)
+// and the weights between them. Lookups whose direction is known ahead (the reflection
+// capture's) keep this and skip the address arithmetic.
+struct BorderedBilinear {
+  uint32_t index = 0;
+  float wx = 0.0f, wy = 0.0f;
+};
+BorderedBilinear borderedBilinear(int size, const CubeFaceUv& p);
+inline glm::vec3 sampleBordered(const BorderedCubemap& cube, const BorderedBilinear& b) {
+  const size_t m = size_t(cube.size) + 2;
+  const glm::vec3* row = cube.texels.data() + b.index;
+  const glm::vec3 top = glm::mix(row[0], row[1], b.wx);
+  const glm::vec3 bottom = glm::mix(row[m], row[m + 1], b.wx);
+  return glm::mix(top, bottom, b.wy);
+}
+
 // One texel's share of a filtered lookup: texels[index] (the layout above) times weight.
 struct CubemapTap {
   uint32_t index = 0;

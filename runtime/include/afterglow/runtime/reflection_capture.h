@@ -112,23 +112,18 @@ using CubemapChain = std::vector<Cubemap>;
 // mip mipOfRoughness(r, chain size), bilinear within a mip (sampleCubemap), linear between the
 // two mips around it. Black for an empty chain.
 glm::vec3 sampleChain(const CubemapChain& chain, glm::vec3 direction, float perceptualRoughness);
-// The same from the chain's bordered mips (cubemap.h's withBorder), equal bit for bit and
-// several times faster: what the capture passes and the render read.
+// The chain's mips bordered (cubemap.h's withBorder): what the capture passes and the render
+// read, through reflection taps below.
 using BorderedChain = std::vector<BorderedCubemap>;
 BorderedChain withBorders(const CubemapChain& chain);
-glm::vec3 sampleChain(const BorderedChain& chain, glm::vec3 direction, float perceptualRoughness);
-glm::vec3 sampleChain(const BorderedChain& chain, const CubeFaceUv& at, float perceptualRoughness);
 
 // One probe's part in a point's specular lighting: its blend weight and the two box-projected
-// directions its chain is read in (the reflection, and the normal for the normalisation). They
-// depend on geometry only (the point, its normal and roughness, the viewer, the boxes), so a
-// capture computes them once (ReflectionShadingSetup) and every pass reads the chains alone.
+// directions its chain is read in (the reflection, and the normal for the normalisation).
 struct ReflectionLookup {
   int probe = 0;               // 0 the sky, i + 1 boxes[i]
   float weight = 0.0f;
   glm::vec3 reflected{0.0f};   // where the probe's chain is read, at the roughness's mip
   glm::vec3 normal{0.0f};      // where its irradiance is read
-  CubeFaceUv at;               // `reflected`'s face and u, v (the same on every mip)
 };
 // At most this many probes blend at a point: where more boxes overlap, the largest weights are
 // kept and renormalised (engines blend two to four).
@@ -139,10 +134,38 @@ int reflectionLookups(const std::vector<ReflectionProbeBox>& boxes, glm::vec3 po
                       glm::vec3 normal, glm::vec3 toViewer, float perceptualRoughness,
                       ReflectionLookup out[kMaxReflectionBlend]);
 
+// One probe's chain as the capture passes and the render read it: its mips bordered
+// (cubemap.h's withBorder, so lookups never branch) and its irradiance E/π for the
+// normalisation, from the chain's radiance SH (chainIrradianceSh) tabulated on a small cube:
+// SH L2 irradiance is smooth, and a bilinear read of 16² faces is within 1% of the mean
+// irradiance of evaluating it (0.8% around a sun: reflection_lighting_test.cpp), where the
+// normalisation is a ratio scaled by roughness.
+constexpr int kProbeIrradianceSize = 16;
+struct ProbeLight {
+  BorderedChain mips;
+  BorderedCubemap irradiance;
+  bool empty() const { return mips.empty(); }
+};
+ProbeLight probeLight(const CubemapChain& chain);
+
+// A lookup resolved against its probe's chain shape: the texels and weights it reads, so a
+// capture pass (which reads the same lookups every pass) does no address arithmetic. The
+// trilinear read of the roughness's mip (sampleChain) is two bilinear reads of mips level[0]
+// and level[1], weighted by the blend weight × (1 − f) and × f.
+struct ReflectionTap {
+  uint16_t probe = 0;
+  uint8_t level[2] = {0, 0};
+  BorderedBilinear at[2];        // in mips level[0] and level[1]
+  float weight[2] = {0.0f, 0.0f};
+  BorderedBilinear irradiance;   // in ProbeLight::irradiance, at the projected normal
+};
+// `mips` faces halving from `faceSize` (a probe's chain shape).
+ReflectionTap reflectionTap(const ReflectionLookup& lookup, float perceptualRoughness,
+                            int faceSize, int mips);
+
 // The split-sum specular lighting at a point, from probes blended and box-projected as at run
-// time: chains[0] is the sky, chains[i + 1] boxes[i]; dfg is dfgTable(dfgSize); irradianceSh
-// (one per chain, chainIrradianceSh) their radiance SH for the normalisation. `toViewer` is the
-// unit direction from the point to the eye, `normal` the unit shading normal, `lightmap`
+// time: lights[0] is the sky, lights[i + 1] boxes[i]; dfg is dfgTable(dfgSize). `toViewer` is
+// the unit direction from the point to the eye, `normal` the unit shading normal, `lightmap`
 // (optional) the point's lightmap E/π. Three corrections engines apply to rough reflections
 // (reflection_capture.cpp): the lookup along GGX's dominant direction, box projection faded out
 // by α, and, with a lightmap, normalisation by the ratio of the lightmap's irradiance to the
@@ -150,18 +173,15 @@ int reflectionLookups(const std::vector<ReflectionProbeBox>& boxes, glm::vec3 po
 // from 9.6% to 4.7% RMSE against the path-traced reference (reflection_bake_test.cpp).
 struct ReflectionLighting {
   const std::vector<ReflectionProbeBox>* boxes = nullptr;
-  const std::vector<CubemapChain>* chains = nullptr;
+  const std::vector<ProbeLight>* lights = nullptr;
   const std::vector<glm::vec2>* dfg = nullptr;
   int dfgSize = 0;
-  const std::vector<ShL2>* irradianceSh = nullptr;
-  // Optional: the chains bordered (withBorders), read instead of `chains` when given.
-  const std::vector<BorderedChain>* bordered = nullptr;
 
   glm::vec3 specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer, glm::vec3 f0,
                      float perceptualRoughness, const glm::vec3* lightmap = nullptr) const;
-  // The radiance of a point's lookups (before F0 · scale + bias), normalised by `lightmap`
-  // when given: the dynamic half of specular().
-  glm::vec3 radiance(const ReflectionLookup* lookups, int count, float perceptualRoughness,
+  // The radiance of a point's taps (before F0 · scale + bias), normalised by `lightmap` when
+  // given: the dynamic half of specular(). Taps of a probe without a chain yet read black.
+  glm::vec3 radiance(const ReflectionTap* taps, int count, float perceptualRoughness,
                      const glm::vec3* lightmap) const;
 };
 
@@ -169,17 +189,17 @@ struct ReflectionLighting {
 // for the normalisation.
 ShL2 chainIrradianceSh(const CubemapChain& chain);
 
-// The static half of a probe's capture passes: per texel, its lookups and its split-sum
-// factor F0 · scale + bias (zero: no specular): 44 bytes a lookup, 16 a texel, 4-10 MB for a
-// 128² probe (floats: the passes read them for every texel, and half floats cost a third of
-// the pass in conversions). Built once per probe (prepareReflectionShading), kept by the
-// runtime; every pass reads it.
+// The static half of a probe's capture passes: per texel, its taps and its split-sum factor
+// F0 · scale + bias (zero: no specular): 48 bytes a tap, 16 a texel, 5-12 MB for a 128²
+// probe. Built once per probe (prepareReflectionShading), kept by the runtime; every pass
+// reads it. Taps assume every chain has reflectionChain's shape (kReflectionMipCount mips from
+// the probe's resolution, the sky's kReflectionSkyResolution).
 struct ReflectionShadingSetup {
-  std::vector<uint32_t> start;            // texels + 1: texel t's lookups [start[t], start[t + 1])
-  std::vector<ReflectionLookup> lookups;
+  std::vector<uint32_t> start;            // texels + 1: texel t's taps [start[t], start[t + 1])
+  std::vector<ReflectionTap> taps;
   std::vector<glm::vec3> specular;        // per texel: F0 · scale + bias
   size_t bytes() const {
-    return start.size() * sizeof(uint32_t) + lookups.size() * sizeof(ReflectionLookup) +
+    return start.size() * sizeof(uint32_t) + taps.size() * sizeof(ReflectionTap) +
            specular.size() * sizeof(glm::vec3);
   }
 };

@@ -314,6 +314,7 @@ class Runtime {
   size_t reflectionCursor_ = 0;  // the next unit: pass · probes + probe
   std::vector<ReflectionProbeBox> reflectionBoxes_;
   std::vector<ReflectionShadingSetup> reflectionSetups_;  // per probe, built on first use
+  std::vector<std::vector<ProbeLight>> reflectionLights_;  // [pass][0 sky, i + 1 probe i]
   std::vector<glm::vec2> dfg_;
   std::vector<std::shared_ptr<const CubemapChain>> reflectionOut_;
   // Runs reflection units (as UpdateOptions::reflectionPasses) and publishes; fills stats. A
