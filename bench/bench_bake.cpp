@@ -8,8 +8,10 @@
 //       [--far-levels N] [--far-scale X] [--far-distance X] [--shared-far-span N] [--shared-far-points X]
 //       [--filter-passes N] [--filter-reach X] [--min-weight W] [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]] [--repeat N] [--single-sided-emission]
+//       [--reference-cache FILE]
 // SCENE defaults to the Cornell box of ../shared/scenes; --spp 0 only times the bake; --repeat
-// bakes N times and reports the fastest (for profiling and best-of-N timings).
+// bakes N times and reports the fastest (for profiling and best-of-N timings); --reference-cache
+// keeps the reference in FILE and reuses it while the texels stay the same (reference_cache.h).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +25,7 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/uv/unwrap.h"
 #include "bench_common.h"
+#include "reference_cache.h"
 
 namespace afterglow::bench {
 
@@ -65,6 +68,7 @@ int benchAccuracy(int argc, char** argv) {
   float texelsPerUnit = 0.0f;
   int atlasSize = 256, threads = 2, spp = 16384, stride = 32, worst = 0, repeat = 1;
   bool worstDirect = false, singleSidedEmission = false;
+  std::string referenceCache;
   baker::BakeOptions options;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -78,6 +82,7 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--repeat") repeat = std::max(1, int(next()));
     else if (arg == "--direct") worstDirect = true;
     else if (arg == "--single-sided-emission") singleSidedEmission = true;
+    else if (arg == "--reference-cache" && i + 1 < argc) referenceCache = argv[++i];
     else if (arg == "--quality" && i + 1 < argc) {
       const std::string q = argv[++i];
       options = baker::bakePreset(q == "draft" ? baker::Quality::Draft
@@ -159,10 +164,20 @@ int benchAccuracy(int argc, char** argv) {
   baker::ReferenceOptions ro;
   ro.samples = spp;
   t0 = Clock::now();
-  Result<baker::ReferenceTexels> ref =
-      baker::referenceTexels(scene, *tracer.value(), b.texels, baker::Environment(), ro, subset);
+  Result<baker::ReferenceTexels> ref{baker::ReferenceTexels()};
+  std::string why;
+  if (!referenceCache.empty() &&
+      loadReferenceCache(referenceCache, b.texels, subset, spp, ref.value(), why)) {
+    std::printf("reference    read from %s\n", referenceCache.c_str());
+  } else {
+    if (!referenceCache.empty())
+      std::printf("reference    %s: %s, computing it\n", referenceCache.c_str(), why.c_str());
+    ref = baker::referenceTexels(scene, *tracer.value(), b.texels, baker::Environment(), ro, subset);
+    if (!ref) return fail(ref.message());
+    if (!referenceCache.empty() && !saveReferenceCache(referenceCache, b.texels, spp, ref.value()))
+      return fail("accuracy: cannot write the reference cache " + referenceCache);
+  }
   const double refSeconds = secondsSince(t0);
-  if (!ref) return fail(ref.message());
   const baker::ReferenceComparison c =
       baker::compareToReference(ref.value(), b.texelDirect, b.texelIndirect);
   std::printf("reference    %zu texels x %d paths in %.1f s\n", c.texels, spp, refSeconds);

@@ -1,0 +1,91 @@
+// afterglow_bench accuracy's reference cache (reference_cache.h).
+#include "reference_cache.h"
+
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+
+#include "afterglow/core/atomic_file.h"
+
+namespace afterglow::bench {
+
+namespace {
+
+constexpr char kMagic[8] = {'A', 'G', 'R', 'E', 'F', '0', '0', '1'};
+
+// One estimated texel as stored: what identifies it, then the estimates.
+struct Record {
+  uint32_t texel;
+  float position[3], normal[3];
+  float direct[3], indirect[3], directVariance[3], indirectVariance[3];
+};
+
+void put(float* to, glm::vec3 v) { to[0] = v.x, to[1] = v.y, to[2] = v.z; }
+glm::vec3 get(const float* from) { return glm::vec3(from[0], from[1], from[2]); }
+
+}  // namespace
+
+bool loadReferenceCache(const std::string& path, const baker::TexelSet& texels,
+                        const std::vector<uint32_t>& which, int spp, baker::ReferenceTexels& out,
+                        std::string& why) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) {
+    why = "no cache yet";
+    return false;
+  }
+  char magic[8];
+  int32_t fileSpp = 0;
+  uint64_t count = 0;
+  bool ok = std::fread(magic, 1, 8, f) == 8 && std::memcmp(magic, kMagic, 8) == 0 &&
+            std::fread(&fileSpp, sizeof fileSpp, 1, f) == 1 &&
+            std::fread(&count, sizeof count, 1, f) == 1;
+  if (!ok) why = "not a reference cache";
+  else if (fileSpp != spp) ok = false, why = "made at " + std::to_string(fileSpp) + " paths";
+  else if (count != which.size()) ok = false, why = "made for other texels";
+  std::vector<Record> records(ok ? count : 0);
+  if (ok && std::fread(records.data(), sizeof(Record), records.size(), f) != records.size())
+    ok = false, why = "truncated";
+  std::fclose(f);
+  for (size_t i = 0; ok && i < records.size(); ++i) {
+    const Record& r = records[i];
+    ok = r.texel == which[i] && r.texel < texels.size() &&
+         get(r.position) == texels.position[r.texel] && get(r.normal) == texels.normal[r.texel];
+    if (!ok) why = "made for other texels";
+  }
+  if (!ok) return false;
+  out = baker::ReferenceTexels();
+  for (const Record& r : records) {
+    out.texels.push_back(r.texel);
+    out.direct.push_back(get(r.direct));
+    out.indirect.push_back(get(r.indirect));
+    out.directVariance.push_back(get(r.directVariance));
+    out.indirectVariance.push_back(get(r.indirectVariance));
+  }
+  return true;
+}
+
+bool saveReferenceCache(const std::string& path, const baker::TexelSet& texels, int spp,
+                        const baker::ReferenceTexels& ref) {
+  std::vector<Record> records(ref.texels.size());
+  for (size_t i = 0; i < records.size(); ++i) {
+    Record& r = records[i];
+    r.texel = ref.texels[i];
+    put(r.position, texels.position[r.texel]);
+    put(r.normal, texels.normal[r.texel]);
+    put(r.direct, ref.direct[i]);
+    put(r.indirect, ref.indirect[i]);
+    put(r.directVariance, ref.directVariance[i]);
+    put(r.indirectVariance, ref.indirectVariance[i]);
+  }
+  const int32_t fileSpp = spp;
+  const uint64_t count = records.size();
+  std::string bytes(kMagic, 8);
+  bytes.append(reinterpret_cast<const char*>(&fileSpp), sizeof fileSpp);
+  bytes.append(reinterpret_cast<const char*>(&count), sizeof count);
+  bytes.append(reinterpret_cast<const char*>(records.data()), records.size() * sizeof(Record));
+  AtomicOutput output;
+  if (!output.write(path, bytes) || !output.commit()) return false;
+  return true;
+}
+
+}  // namespace afterglow::bench
