@@ -8,8 +8,10 @@
 //       [--far-levels N] [--far-scale X] [--far-distance X] [--shared-far-span N] [--shared-far-points X]
 //       [--filter-passes N] [--filter-reach X] [--min-weight W] [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]] [--repeat N] [--single-sided-emission]
+//       [--breakdown RAYS]
 // SCENE defaults to the Cornell box of ../shared/scenes; --spp 0 only times the bake; --repeat
-// bakes N times and reports the fastest (for profiling and best-of-N timings).
+// bakes N times and reports the fastest (for profiling and best-of-N timings); --breakdown
+// prints where the indirect error sits, by class of texel (bench_accuracy_breakdown.cpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +24,7 @@
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/uv/unwrap.h"
+#include "bench_accuracy_breakdown.h"
 #include "bench_common.h"
 
 namespace afterglow::bench {
@@ -64,6 +67,7 @@ int benchAccuracy(int argc, char** argv) {
       std::string(AFTERGLOW_SHARED_DIR) + "/scenes/cornell_box_mcguire/CornellBox-Original.gltf";
   float texelsPerUnit = 0.0f;
   int atlasSize = 256, threads = 2, spp = 16384, stride = 32, worst = 0, repeat = 1;
+  int breakdownRays = 0;
   bool worstDirect = false, singleSidedEmission = false;
   baker::BakeOptions options;
   for (int i = 2; i < argc; ++i) {
@@ -77,6 +81,7 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--worst") worst = int(next());
     else if (arg == "--repeat") repeat = std::max(1, int(next()));
     else if (arg == "--direct") worstDirect = true;
+    else if (arg == "--breakdown") breakdownRays = int(next());
     else if (arg == "--single-sided-emission") singleSidedEmission = true;
     else if (arg == "--quality" && i + 1 < argc) {
       const std::string q = argv[++i];
@@ -174,6 +179,8 @@ int benchAccuracy(int argc, char** argv) {
   line("indirect", c.indirect);
   line("total", c.total);
   if (worst > 0) printWorst(b, ref.value(), size_t(worst), worstDirect);
+  if (breakdownRays > 0)
+    printIndirectBreakdown(scene, *tracer.value(), b, ref.value(), breakdownRays);
   return 0;
 }
 
