@@ -6,12 +6,14 @@
 //       [--near-rays N] [--near-distance X] [--near-field X] [--block-distance X]
 //       [--cluster-size M] [--cluster-texels N] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
 //       [--far-levels N] [--far-scale X] [--far-distance X] [--shared-far-span N] [--shared-far-points X]
-//       [--filter-passes N] [--filter-reach X] [--min-weight W] [--light-samples N] [--emissive-samples N]
+//       [--filter-passes N] [--filter-reach X] [--filter-angle DEG] [--min-weight W] [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]] [--repeat N] [--single-sided-emission]
-//       [--reference-cache FILE]
+//       [--reference-cache FILE] [--breakdown RAYS]
 // SCENE defaults to the Cornell box of ../shared/scenes; --spp 0 only times the bake; --repeat
 // bakes N times and reports the fastest (for profiling and best-of-N timings); --reference-cache
-// keeps the reference in FILE and reuses it while the texels stay the same (reference_cache.h).
+// keeps the reference in FILE and reuses it while the texels stay the same (reference_cache.h);
+// --breakdown prints where the indirect error sits, by class of texel
+// (bench_accuracy_breakdown.cpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -24,6 +26,7 @@
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/uv/unwrap.h"
+#include "bench_accuracy_breakdown.h"
 #include "bench_common.h"
 #include "reference_cache.h"
 
@@ -67,6 +70,7 @@ int benchAccuracy(int argc, char** argv) {
       std::string(AFTERGLOW_SHARED_DIR) + "/scenes/cornell_box_mcguire/CornellBox-Original.gltf";
   float texelsPerUnit = 0.0f;
   int atlasSize = 256, threads = 2, spp = 16384, stride = 32, worst = 0, repeat = 1;
+  int breakdownRays = 0;
   bool worstDirect = false, singleSidedEmission = false;
   std::string referenceCache;
   baker::BakeOptions options;
@@ -81,6 +85,7 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--worst") worst = int(next());
     else if (arg == "--repeat") repeat = std::max(1, int(next()));
     else if (arg == "--direct") worstDirect = true;
+    else if (arg == "--breakdown") breakdownRays = int(next());
     else if (arg == "--single-sided-emission") singleSidedEmission = true;
     else if (arg == "--reference-cache" && i + 1 < argc) referenceCache = argv[++i];
     else if (arg == "--quality" && i + 1 < argc) {
@@ -106,6 +111,7 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--filter-passes") options.links.filterPasses = int(next());
     else if (arg == "--min-weight") options.links.minWeight = float(next());
     else if (arg == "--filter-reach") options.links.filterReach = float(next());
+    else if (arg == "--filter-angle") options.links.filterMaxAngleDeg = float(next());
     else if (arg == "--light-samples") options.direct.lightSamples = int(next());
     else if (arg == "--emissive-samples") options.direct.emissiveSamples = int(next());
     else if (arg == "--penumbra-samples") options.direct.penumbraSamples = int(next());
@@ -189,6 +195,8 @@ int benchAccuracy(int argc, char** argv) {
   line("indirect", c.indirect);
   line("total", c.total);
   if (worst > 0) printWorst(b, ref.value(), size_t(worst), worstDirect);
+  if (breakdownRays > 0)
+    printIndirectBreakdown(scene, *tracer.value(), b, ref.value(), breakdownRays);
   return 0;
 }
 

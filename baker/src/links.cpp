@@ -208,11 +208,13 @@ bool sightLine(const TexelSet& texels, uint32_t a, uint32_t b, Ray& sight) {
 std::vector<uint8_t> markFilterNeighbours(const RayTracer& tracer, const TexelSet& texels,
                                           const TexelGather& gather, const LinkOptions& options) {
   std::vector<uint8_t> marks(texels.size(), 0);
+  const float cosMaxAngle = std::cos(glm::radians(options.filterMaxAngleDeg));
   // Whether a and b may smooth each other: kNo, kYes, or kInSight when the sight line `sight`
   // between them is clear.
   enum Compatible { kNo, kYes, kInSight };
   auto compatible = [&](uint32_t a, uint32_t b, Ray& sight) {
     if (!texels.valid[b] || !sameSurface(texels, a, b)) return kNo;
+    if (glm::dot(texels.normal[a], texels.normal[b]) < cosMaxAngle) return kNo;
     const float distance = glm::length(texels.position[b] - texels.position[a]);
     const float reach = options.filterReach *
                         std::min(gather.harmonicDistance[a], gather.harmonicDistance[b]);

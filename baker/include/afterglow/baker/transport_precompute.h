@@ -74,6 +74,8 @@ struct LinkOptions {
   // texels then read the gather points around them with one more tent.
   int filterPasses = 2;
   float filterReach = 0.5f;  // unitless
+  // ... and whose shading normals lie within this angle (at most the 30° of one surface).
+  float filterMaxAngleDeg = 30.0f;  // degrees
 };
 
 // Traces every valid texel's gather rays, marks texels inside walls invalid (in `texels`), and
