@@ -172,15 +172,16 @@ int benchAccuracy(int argc, char** argv) {
   t0 = Clock::now();
   Result<baker::ReferenceTexels> ref{baker::ReferenceTexels()};
   std::string why;
+  const std::string cacheKey = scenePath + (singleSidedEmission ? " single-sided emission" : "");
   if (!referenceCache.empty() &&
-      loadReferenceCache(referenceCache, b.texels, subset, spp, ref.value(), why)) {
+      loadReferenceCache(referenceCache, cacheKey, b.texels, subset, spp, ref.value(), why)) {
     std::printf("reference    read from %s\n", referenceCache.c_str());
   } else {
     if (!referenceCache.empty())
       std::printf("reference    %s: %s, computing it\n", referenceCache.c_str(), why.c_str());
     ref = baker::referenceTexels(scene, *tracer.value(), b.texels, baker::Environment(), ro, subset);
     if (!ref) return fail(ref.message());
-    if (!referenceCache.empty() && !saveReferenceCache(referenceCache, b.texels, spp, ref.value()))
+    if (!referenceCache.empty() && !saveReferenceCache(referenceCache, cacheKey, b.texels, spp, ref.value()))
       return fail("accuracy: cannot write the reference cache " + referenceCache);
   }
   const double refSeconds = secondsSince(t0);

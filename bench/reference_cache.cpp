@@ -11,7 +11,7 @@ namespace afterglow::bench {
 
 namespace {
 
-constexpr char kMagic[8] = {'A', 'G', 'R', 'E', 'F', '0', '0', '1'};
+constexpr char kMagic[8] = {'A', 'G', 'R', 'E', 'F', '0', '0', '2'};
 
 // One estimated texel as stored: what identifies it, then the estimates.
 struct Record {
@@ -25,9 +25,9 @@ glm::vec3 get(const float* from) { return glm::vec3(from[0], from[1], from[2]); 
 
 }  // namespace
 
-bool loadReferenceCache(const std::string& path, const baker::TexelSet& texels,
-                        const std::vector<uint32_t>& which, int spp, baker::ReferenceTexels& out,
-                        std::string& why) {
+bool loadReferenceCache(const std::string& path, const std::string& key,
+                        const baker::TexelSet& texels, const std::vector<uint32_t>& which, int spp,
+                        baker::ReferenceTexels& out, std::string& why) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) {
     why = "no cache yet";
@@ -35,11 +35,16 @@ bool loadReferenceCache(const std::string& path, const baker::TexelSet& texels,
   }
   char magic[8];
   int32_t fileSpp = 0;
+  uint32_t keyLength = 0;
   uint64_t count = 0;
   bool ok = std::fread(magic, 1, 8, f) == 8 && std::memcmp(magic, kMagic, 8) == 0 &&
-            std::fread(&fileSpp, sizeof fileSpp, 1, f) == 1 &&
-            std::fread(&count, sizeof count, 1, f) == 1;
+            std::fread(&keyLength, sizeof keyLength, 1, f) == 1 && keyLength < (1u << 16);
+  std::string fileKey(ok ? keyLength : 0, '\0');
+  ok = ok && std::fread(fileKey.data(), 1, fileKey.size(), f) == fileKey.size() &&
+       std::fread(&fileSpp, sizeof fileSpp, 1, f) == 1 &&
+       std::fread(&count, sizeof count, 1, f) == 1;
   if (!ok) why = "not a reference cache";
+  else if (fileKey != key) ok = false, why = "made for " + fileKey;
   else if (fileSpp != spp) ok = false, why = "made at " + std::to_string(fileSpp) + " paths";
   else if (count != which.size()) ok = false, why = "made for other texels";
   std::vector<Record> records(ok ? count : 0);
@@ -64,8 +69,8 @@ bool loadReferenceCache(const std::string& path, const baker::TexelSet& texels,
   return true;
 }
 
-bool saveReferenceCache(const std::string& path, const baker::TexelSet& texels, int spp,
-                        const baker::ReferenceTexels& ref) {
+bool saveReferenceCache(const std::string& path, const std::string& key,
+                        const baker::TexelSet& texels, int spp, const baker::ReferenceTexels& ref) {
   std::vector<Record> records(ref.texels.size());
   for (size_t i = 0; i < records.size(); ++i) {
     Record& r = records[i];
@@ -80,6 +85,9 @@ bool saveReferenceCache(const std::string& path, const baker::TexelSet& texels, 
   const int32_t fileSpp = spp;
   const uint64_t count = records.size();
   std::string bytes(kMagic, 8);
+  const uint32_t keyLength = uint32_t(key.size());
+  bytes.append(reinterpret_cast<const char*>(&keyLength), sizeof keyLength);
+  bytes.append(key);
   bytes.append(reinterpret_cast<const char*>(&fileSpp), sizeof fileSpp);
   bytes.append(reinterpret_cast<const char*>(&count), sizeof count);
   bytes.append(reinterpret_cast<const char*>(records.data()), records.size() * sizeof(Record));
