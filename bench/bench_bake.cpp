@@ -6,7 +6,7 @@
 //       [--near-rays N] [--near-distance X] [--near-field X] [--block-distance X]
 //       [--cluster-size M] [--cluster-texels N] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
 //       [--far-levels N] [--far-scale X] [--far-distance X] [--shared-far-span N] [--shared-far-points X]
-//       [--filter-passes N] [--filter-reach X] [--filter-angle DEG] [--min-weight W] [--light-samples N] [--emissive-samples N]
+//       [--filter-passes N] [--filter-reach X] [--filter-angle DEG] [--no-light-match] [--min-weight W] [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]] [--repeat N] [--single-sided-emission]
 //       [--reference-cache FILE] [--breakdown RAYS]
 // SCENE defaults to the Cornell box of ../shared/scenes; --spp 0 only times the bake; --repeat
@@ -112,6 +112,7 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--min-weight") options.links.minWeight = float(next());
     else if (arg == "--filter-reach") options.links.filterReach = float(next());
     else if (arg == "--filter-angle") options.links.filterMaxAngleDeg = float(next());
+    else if (arg == "--no-light-match") options.links.lightMatch = false;
     else if (arg == "--light-samples") options.direct.lightSamples = int(next());
     else if (arg == "--emissive-samples") options.direct.emissiveSamples = int(next());
     else if (arg == "--penumbra-samples") options.direct.penumbraSamples = int(next());

@@ -143,7 +143,12 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   // Texels found inside walls are collected apart and invalidated after the pass: hits read
   // texels.valid, so changing it during the pass would race and depend on thread timing.
   std::vector<uint8_t> buried(count, 0);
-  const TexelLookup lookup(texels);
+  // The lights each texel's sample sees, for the close hits' check (TexelOfHit::lightMatch).
+  const LightVisibility lights(scene);
+  const std::vector<uint32_t> reached =
+      options.lightMatch ? lights.texels(tracer, texels) : std::vector<uint32_t>();
+  TexelLookup lookup(texels);
+  if (options.lightMatch) lookup.setLights(&lights, &reached);
   // Texel t's first-pass samples, sample(s, u) for s = 0 .. firstCount[t]: one sequence per
   // texel (so a ray can be cast again alike).
   auto firstSamples = [&](uint32_t t, auto&& sample) {
@@ -216,7 +221,8 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   bool anyBuried = false;
   for (uint32_t t = 0; t < count; ++t)
     if (buried[t]) texels.valid[t] = 0, anyBuried = true;
-  const TexelLookup settled(texels);
+  TexelLookup settled(texels);
+  if (options.lightMatch) settled.setLights(&lights, &reached);
 
   // Where other geometry is close (harmonic distance under blockDistance texel edges) bounced
   // light changes too fast to share: such a texel leaves its block for a gather point of its

@@ -14,6 +14,7 @@
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/texels.h"
 #include "afterglow/baker/transport_precompute.h"
+#include "light_visibility.h"
 #include "sampling.h"
 
 namespace afterglow::baker {
@@ -91,6 +92,17 @@ class TexelLookup {
   // through a cornice). A texel from the table needs no instance check: a point inside a chart
   // only finds that chart's texels (charts sit `padding` texels apart).
   static constexpr uint32_t kNear = 0x80000000u;
+
+  // Optional: the lights that reach each texel's sample (LightVisibility::texels), so that a
+  // hit close to its ray's origin takes the light of a texel lit like the hit point
+  // (TexelOfHit::lightMatch). Both must outlive the lookup.
+  void setLights(const LightVisibility* lights, const std::vector<uint32_t>* reached) {
+    lights_ = lights && !lights->empty() ? lights : nullptr;
+    reached_ = reached;
+  }
+  const LightVisibility* lights() const { return lights_; }
+  const std::vector<uint32_t>& reached() const { return *reached_; }
+
   uint32_t resolve(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1,
                    const uint32_t* entry) const {
     if (entry && *entry != runtime::kNoTexel) return *entry;
@@ -101,6 +113,8 @@ class TexelLookup {
  private:
   const TexelSet& texels_;
   std::vector<std::vector<uint32_t>> resolved_;
+  const LightVisibility* lights_ = nullptr;
+  const std::vector<uint32_t>* reached_ = nullptr;
 };
 
 // The texel whose light a ray hit receives: t, the texel under the hit point, unless a
@@ -151,6 +165,50 @@ struct TexelOfHit {
         }
       }
     return best;
+  }
+
+  // A hit nearer its ray's origin than this many of its texel's edges is checked for light
+  // (lightMatch): there the hit point and its texel's sample may lie on either side of a
+  // shadow the ray's own surface casts, and the hit covers a wide solid angle. Farther hits
+  // each cover little, and their errors average out over the rays.
+  static constexpr float kLightCheckEdges = 4.0f;
+
+  // Texel t, or the texel whose light a hit should take instead: when the lights that reach
+  // the hit point (lifted off its surface like t's sample) are not those that reach t's
+  // sample, the nearest valid texel of t's chart within two texels that is lit like the hit
+  // point and that the hit point sees. With none: kNoTexel (absorbed) when a light reaches t's
+  // sample but not the hit point, for a sunlit sample must not light a shadowed contact, whose
+  // own light is the little that bounced into it; else t.
+  static uint32_t lightMatch(const RayTracer& tracer, const TexelSet& texels,
+                             const TexelLookup& lookup, uint32_t t, const Hit& hit,
+                             glm::vec3 hitPoint) {
+    const uint32_t want = lookup.lights()->at(tracer, from(texels, t, hit, hitPoint),
+                                              hit.geometricNormal);
+    const std::vector<uint32_t>& reached = lookup.reached();
+    if (want == reached[t]) return t;
+    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+    const int x = texels.pixel[t].x, y = texels.pixel[t].y;
+    const glm::vec3 origin = from(texels, t, hit, hitPoint);
+    uint32_t best = runtime::kNoTexel;
+    float bestDistance = std::numeric_limits<float>::infinity();
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int nx = x + dx, ny = y + dy;
+        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height)
+          continue;
+        const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
+        if (n == runtime::kNoTexel || !texels.valid[n] || reached[n] != want ||
+            texels.instance[n] != texels.instance[t])
+          continue;
+        const float distance = glm::length(texels.position[n] - origin);
+        if (distance >= bestDistance) continue;
+        Ray line;
+        if (sightLine(texels, t, hit, hitPoint, n, line) && tracer.occluded(line)) continue;
+        bestDistance = distance;
+        best = n;
+      }
+    if (best != runtime::kNoTexel) return best;
+    return (reached[t] & ~want) ? runtime::kNoTexel : t;
   }
 
  private:
@@ -265,15 +323,26 @@ class GatherBatch {
         code(k, t);
     }
     sightOf_.resize(lines);
-    if (lines == 0) return;
-    if (blockedSize_ < lines) {
-      blockedSize_ = lines;
-      blocked_.reset(new bool[blockedSize_]);
+    if (lines > 0) {
+      if (blockedSize_ < lines) {
+        blockedSize_ = lines;
+        blocked_.reset(new bool[blockedSize_]);
+      }
+      tracer.occluded(sightRays_.data(), blocked_.get(), lines);
+      for (size_t i = 0; i < lines; ++i) {
+        const auto [k, t] = sightOf_[i];
+        code(k, blocked_[i] ? TexelOfHit::standIn(tracer, texels, t, hits_[k], hitPoint(k)) : t);
+      }
     }
-    tracer.occluded(sightRays_.data(), blocked_.get(), lines);
-    for (size_t i = 0; i < lines; ++i) {
-      const auto [k, t] = sightOf_[i];
-      code(k, blocked_[i] ? TexelOfHit::standIn(tracer, texels, t, hits_[k], hitPoint(k)) : t);
+    // Close front-side hits take the light of a texel lit like them (TexelOfHit::lightMatch).
+    if (!sightLines || !lookup->lights()) return;
+    for (size_t k = first; k < rays_.size(); ++k) {
+      const uint32_t c = codes_[k];
+      if (c == TexelGather::kNoHit || (c & TexelGather::kBackSide)) continue;
+      const uint32_t t = c & TexelGather::kTexelMask;
+      if (!(hits_[k].t < TexelOfHit::kLightCheckEdges * texels.edge[t])) continue;
+      const uint32_t match = TexelOfHit::lightMatch(tracer, texels, *lookup, t, hits_[k], hitPoint(k));
+      codes_[k] = match == runtime::kNoTexel ? TexelGather::kNoHit : match;
     }
   }
 
