@@ -86,4 +86,23 @@ scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohm
   return scene;
 }
 
+scenes::Scene cornellForAccuracy(const std::string& path) {
+  Result<scenes::Scene> loaded = scenes::loadGltf(path);
+  EXPECT_TRUE(loaded) << loaded.message();
+  if (!loaded) return {};
+  scenes::Scene scene = std::move(loaded.value());
+  for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
+  uv::UnwrapOptions unwrap;
+  Result<float> density = uv::fitTexelsPerUnit(scene, unwrap, 256);
+  EXPECT_TRUE(density) << density.message();
+  if (!density) return {};
+  unwrap.pack.texelsPerUnit = density.value();
+  unwrap.pack.maxAtlasSize = 256;
+  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
+  EXPECT_TRUE(unwrapped) << unwrapped.message();
+  if (!unwrapped) return {};
+  EXPECT_EQ(unwrapped->metrics.atlases.size(), 1u);
+  return scene;
+}
+
 }  // namespace afterglow::baker

@@ -24,5 +24,12 @@ scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColo
 // written through the exporter, its one material's KHR_materials_specular put into the JSON by
 // hand (when `specular` is not null), loaded back from the file and unwrapped at 4 texels/unit.
 scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohmann::json& specular);
+// McGuire's Cornell box from `path`, as the accuracy tests bake it: unwrapped into one 256²
+// atlas, the lamp emitting downwards only. By glTF the double-sided lamp's back lights the
+// 1 cm cavity above it, whose light a path tracer finds only through the slit around the lamp
+// (at 32768 paths its own indirect noise is 5.6%, too much to judge a 3% error by); the
+// cavity's light is checked by its power balance (baker_emission_test.cpp) and against Cycles
+// (README). A test failure (and an empty scene) when loading or unwrapping fails.
+scenes::Scene cornellForAccuracy(const std::string& path);
 
 }  // namespace afterglow::baker

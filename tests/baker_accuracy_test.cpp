@@ -13,6 +13,7 @@
 #include "afterglow/baker/reference.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/uv/unwrap.h"
+#include "bake_fixtures.h"
 #include "test_util.h"
 
 namespace afterglow::baker {
@@ -20,23 +21,8 @@ namespace {
 
 TEST(BakeAccuracy, CornellBoxDefaultBakeMatchesTheReferencePathTracer) {
   AG_REQUIRE_SHARED_SCENE(path, "cornell_box_mcguire/CornellBox-Original.gltf");
-  Result<scenes::Scene> loaded = scenes::loadGltf(path);
-  ASSERT_TRUE(loaded) << loaded.message();
-  scenes::Scene scene = std::move(loaded.value());
-  // The lamp is a double-sided quad 1 cm below the ceiling, so by glTF its back lights the cavity
-  // above it, and some of that light escapes through the 1 cm slit around it. A path tracer
-  // finds that light only through the slit: at 32768 paths its own indirect noise is 5.6%,
-  // too much to judge a 3% error by. The lamp emits downwards only here; the cavity's light
-  // is checked by its power balance (baker_emission_test.cpp) and against Cycles (README).
-  for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
-  uv::UnwrapOptions unwrap;
-  Result<float> density = uv::fitTexelsPerUnit(scene, unwrap, 256);
-  ASSERT_TRUE(density) << density.message();
-  unwrap.pack.texelsPerUnit = density.value();
-  unwrap.pack.maxAtlasSize = 256;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
-  ASSERT_TRUE(unwrapped) << unwrapped.message();
-  ASSERT_EQ(unwrapped->metrics.atlases.size(), 1u);
+  const scenes::Scene scene = cornellForAccuracy(path);  // the lamp emits downwards only
+  ASSERT_FALSE(scene.materials.empty());
 
   Result<BakeResult> baked = bake(scene, BakeOptions());
   ASSERT_TRUE(baked) << baked.message();

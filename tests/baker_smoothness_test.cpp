@@ -30,6 +30,7 @@
 #include "afterglow/baker/reference.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/uv/unwrap.h"
+#include "bake_fixtures.h"
 #include "test_util.h"
 
 namespace afterglow::baker {
@@ -159,20 +160,8 @@ float grey(glm::vec3 v) { return (v.x + v.y + v.z) / 3.0f; }
 // --gtest_also_run_disabled_tests --gtest_filter='BakeSmoothness*' (about 30 s on one core).
 TEST(BakeSmoothness, DISABLED_CornellWallsBouncedLightHasNoBlotchesBeyondTheReference) {
   AG_REQUIRE_SHARED_SCENE(path, "cornell_box_mcguire/CornellBox-Original.gltf");
-  Result<scenes::Scene> loaded = scenes::loadGltf(path);
-  ASSERT_TRUE(loaded) << loaded.message();
-  scenes::Scene scene = std::move(loaded.value());
-  // As in baker_accuracy_test.cpp: the lamp's back lights a 1 cm cavity whose light a path
-  // tracer finds only through a slit, too noisy a reference; the lamp emits downwards here.
-  for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
-  uv::UnwrapOptions unwrap;
-  Result<float> density = uv::fitTexelsPerUnit(scene, unwrap, 256);
-  ASSERT_TRUE(density) << density.message();
-  unwrap.pack.texelsPerUnit = density.value();
-  unwrap.pack.maxAtlasSize = 256;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
-  ASSERT_TRUE(unwrapped) << unwrapped.message();
-  ASSERT_EQ(unwrapped->metrics.atlases.size(), 1u);
+  const scenes::Scene scene = cornellForAccuracy(path);  // the lamp emits downwards only
+  ASSERT_FALSE(scene.materials.empty());
 
   Result<BakeResult> baked = bake(scene, BakeOptions());
   ASSERT_TRUE(baked) << baked.message();

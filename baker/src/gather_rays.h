@@ -146,31 +146,23 @@ struct TexelOfHit {
       Ray ray;
       return !sightLine(texels, t, hit, hitPoint, candidate, ray) || !tracer.occluded(ray);
     };
-    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
-    const int x = texels.pixel[t].x, y = texels.pixel[t].y;
     uint32_t best = runtime::kNoTexel;
     float bestDistance = std::numeric_limits<float>::infinity();
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int nx = x + dx, ny = y + dy;
-        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height)
-          continue;
-        const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
-        if (n == runtime::kNoTexel || !texels.valid[n] || texels.instance[n] != texels.instance[t])
-          continue;
-        const float distance = glm::length(texels.position[n] - origin);
-        if (distance < bestDistance && sees(n)) {
-          bestDistance = distance;
-          best = n;
-        }
+    forChartNeighbours(texels, t, 1, [&](uint32_t n) {
+      const float distance = glm::length(texels.position[n] - origin);
+      if (distance < bestDistance && sees(n)) {
+        bestDistance = distance;
+        best = n;
       }
+    });
     return best;
   }
 
   // A hit nearer its ray's origin than this many of its texel's edges is checked for light
   // (lightMatch): there the hit point and its texel's sample may lie on either side of a
   // shadow the ray's own surface casts, and the hit covers a wide solid angle. Farther hits
-  // each cover little, and their errors average out over the rays.
+  // each cover little, and their errors average out over the rays. (On Sponza-sun 1, 2 and 4
+  // edges give the same figures; on the contact test 4 does best, for 10% more bake time.)
   static constexpr float kLightCheckEdges = 4.0f;
 
   // Texel t, or the texel whose light a hit should take instead: when the lights that reach
@@ -182,36 +174,43 @@ struct TexelOfHit {
   static uint32_t lightMatch(const RayTracer& tracer, const TexelSet& texels,
                              const TexelLookup& lookup, uint32_t t, const Hit& hit,
                              glm::vec3 hitPoint) {
-    const uint32_t want = lookup.lights()->at(tracer, from(texels, t, hit, hitPoint),
-                                              hit.geometricNormal);
+    const glm::vec3 origin = from(texels, t, hit, hitPoint);
+    const uint32_t want = lookup.lights()->at(tracer, origin, hit.geometricNormal);
     const std::vector<uint32_t>& reached = lookup.reached();
     if (want == reached[t]) return t;
-    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
-    const int x = texels.pixel[t].x, y = texels.pixel[t].y;
-    const glm::vec3 origin = from(texels, t, hit, hitPoint);
     uint32_t best = runtime::kNoTexel;
     float bestDistance = std::numeric_limits<float>::infinity();
-    for (int dy = -2; dy <= 2; ++dy)
-      for (int dx = -2; dx <= 2; ++dx) {
-        const int nx = x + dx, ny = y + dy;
-        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height)
-          continue;
-        const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
-        if (n == runtime::kNoTexel || !texels.valid[n] || reached[n] != want ||
-            texels.instance[n] != texels.instance[t])
-          continue;
-        const float distance = glm::length(texels.position[n] - origin);
-        if (distance >= bestDistance) continue;
-        Ray line;
-        if (sightLine(texels, t, hit, hitPoint, n, line) && tracer.occluded(line)) continue;
-        bestDistance = distance;
-        best = n;
-      }
+    forChartNeighbours(texels, t, 2, [&](uint32_t n) {
+      if (reached[n] != want) return;
+      const float distance = glm::length(texels.position[n] - origin);
+      if (distance >= bestDistance) return;
+      Ray line;
+      if (sightLine(texels, t, hit, hitPoint, n, line) && tracer.occluded(line)) return;
+      bestDistance = distance;
+      best = n;
+    });
     if (best != runtime::kNoTexel) return best;
     return (reached[t] & ~want) ? runtime::kNoTexel : t;
   }
 
  private:
+  // Calls visit(n) for every valid texel n of t's instance within `radius` atlas pixels of t
+  // (t excluded), row by row.
+  template <class Visit>
+  static void forChartNeighbours(const TexelSet& texels, uint32_t t, int radius, Visit&& visit) {
+    const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+    const int x = texels.pixel[t].x, y = texels.pixel[t].y;
+    for (int dy = -radius; dy <= radius; ++dy)
+      for (int dx = -radius; dx <= radius; ++dx) {
+        const int nx = x + dx, ny = y + dy;
+        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= layout.width || ny >= layout.height)
+          continue;
+        const uint32_t n = layout.texelOfPixel[size_t(ny) * size_t(layout.width) + size_t(nx)];
+        if (n != runtime::kNoTexel && texels.valid[n] && texels.instance[n] == texels.instance[t])
+          visit(n);
+      }
+  }
+
   static glm::vec3 from(const TexelSet& texels, uint32_t t, const Hit& hit, glm::vec3 hitPoint) {
     const glm::vec3 side = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
     return hitPoint + side * texels.offset[t];

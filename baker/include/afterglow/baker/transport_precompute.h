@@ -76,7 +76,7 @@ struct LinkOptions {
   float filterReach = 0.5f;  // unitless
   // ... and whose shading normals lie within this angle (at most the 30° of one surface).
   float filterMaxAngleDeg = 30.0f;  // degrees
-  // A gather ray's hit nearer than a texel edge takes the light of a texel that the same
+  // A gather ray's hit nearer than four texel edges takes the light of a texel that the same
   // punctual lights reach as the hit point (gather_rays.h, TexelOfHit::lightMatch), or none
   // when its own texel is lit where the hit point is in shadow.
   bool lightMatch = true;
