@@ -172,6 +172,48 @@ glm::vec3 emittedRadiance(const scenes::Scene& scene, int material, glm::vec2 uv
 
 namespace {
 
+// The diffuse albedo averaged over texel t's footprint: its atlas pixel mapped into the
+// material's UVs through the affine map of its triangle (TEXCOORD_1 in pixels to TEXCOORD_0),
+// read at 4 × 4 points. A texture's detail finer than a texel (roof tiles and the gaps between
+// them, mortar) must reach the bounces as its mean over the texel, as an engine's lightmapping
+// meta pass renders albedo at lightmap resolution, not as whatever the sample point lands on:
+// on Sponza-sun a roof texel whose sample hit a bright spot lit its neighbours 4 times too
+// much (issue 16). Untextured materials, and triangles without both UV sets, read the sample.
+glm::vec3 footprintAlbedo(const scenes::Scene& scene, const TexelSet& texels, int material,
+                          uint32_t t) {
+  const scenes::Material& m = scene.material(material);
+  const bool textured = m.baseColorTexture.valid() || m.metallicRoughnessTexture.valid() ||
+                        m.specularTexture.valid() || m.specularColorTexture.valid();
+  if (!textured) return diffuseAlbedo(scene, material, texels.uv0[t]);
+  const scenes::Instance& inst = scene.instances[texels.instance[t]];
+  const scenes::Primitive& prim =
+      scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]];
+  const size_t first = size_t(texels.triangle[t]) * 3;
+  if (prim.uv0.size() != prim.positions.size() || prim.uv1.size() != prim.positions.size() ||
+      first + 2 >= prim.indices.size() || inst.lightmap.width <= 0)
+    return diffuseAlbedo(scene, material, texels.uv0[t]);
+  const glm::dvec2 size(inst.lightmap.width, inst.lightmap.height);
+  glm::dvec2 px[3], uv[3];
+  for (int k = 0; k < 3; ++k) {
+    px[k] = glm::dvec2(prim.uv1[prim.indices[first + size_t(k)]]) * size;
+    uv[k] = glm::dvec2(prim.uv0[prim.indices[first + size_t(k)]]);
+  }
+  const glm::dmat2 pixels(px[1] - px[0], px[2] - px[0]), uvs(uv[1] - uv[0], uv[2] - uv[0]);
+  const double det = glm::determinant(pixels);
+  if (!(std::abs(det) > 1e-12)) return diffuseAlbedo(scene, material, texels.uv0[t]);
+  const glm::dmat2 perPixel = uvs * glm::inverse(pixels);  // d uv0 / d pixel
+  const glm::dvec2 centre = glm::dvec2(texels.pixel[t]) + 0.5;
+  const glm::dvec2 base = uv[0] + perPixel * (centre - px[0]);
+  glm::dvec3 sum(0.0);
+  constexpr int kSide = 4;
+  for (int y = 0; y < kSide; ++y)
+    for (int x = 0; x < kSide; ++x) {
+      const glm::dvec2 d((double(x) + 0.5) / kSide - 0.5, (double(y) + 0.5) / kSide - 0.5);
+      sum += glm::dvec3(diffuseAlbedo(scene, material, glm::vec2(base + perPixel * d)));
+    }
+  return glm::vec3(sum / double(kSide * kSide));
+}
+
 // Splits one group's texels (one instance and material) into clusters: a k-d subdivision until
 // every node is small enough (clusterSize, adaptiveScale × median ray distance) and uniform
 // enough in ray distance, then normal cones within each leaf.
@@ -550,7 +592,7 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
       plainPosition += glm::dvec3(texels.position[t]);
       normal += a * glm::dvec3(texels.normal[t]);
       plainNormal += glm::dvec3(texels.normal[t]);
-      albedo += a * glm::dvec3(diffuseAlbedo(scene, mat, texels.uv0[t]));
+      albedo += a * glm::dvec3(footprintAlbedo(scene, texels, mat, t));
       emission += a * glm::dvec3(emittedRadiance(scene, mat, texels.uv0[t]));
     }
     const double n = double(members.size());
@@ -567,7 +609,7 @@ Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
       clusters.albedo[c] = glm::vec3(albedo / area);
       clusters.emission[c] = glm::vec3(emission / area);
     } else {
-      clusters.albedo[c] = diffuseAlbedo(scene, mat, texels.uv0[members.front()]);
+      clusters.albedo[c] = footprintAlbedo(scene, texels, mat, members.front());
       clusters.emission[c] = emittedRadiance(scene, mat, texels.uv0[members.front()]);
     }
     // A back-side cluster shows its material's emission only where the back emits.
