@@ -22,6 +22,7 @@
 #include "afterglow/scenes/procedural.h"
 #include "afterglow/uv/unwrap.h"
 #include "../uv/src/texel_raster.h"
+#include "bake_fixtures.h"
 #include "test_util.h"
 
 namespace afterglow::baker {
@@ -787,6 +788,53 @@ TEST(BakerTexels, SponzaAreasAndValidity) {
               "%u clusters (%zu under 4 texels) %.2f s\n",
               texels.size(), valid, texelArea, worldArea, texelSeconds, clusters.size(),
               tinyClusters(clusters), clusterSeconds);
+}
+
+}  // namespace
+}  // namespace afterglow::baker
+
+namespace afterglow::baker {
+namespace {
+
+// Texture detail finer than a texel reaches the bounces as its mean over the texel (an
+// engine's meta pass renders albedo at lightmap resolution), not as whatever texture point
+// the texel's sample lands on: a 2 m floor at 4 texels/m whose base colour is a black and
+// white checker of 4-pixel cells on a 64² texture spanning the floor, 8 texture pixels a
+// texel, shifted by a pixel so that no texel's sample sits on a cell's edge. Every cluster of
+// one texel has the checker's mean, 0.5, as its albedo (specularFactor 0: albedo is the base
+// colour); the texel's sample alone reads black or white.
+TEST(BakerClusters, AlbedoIsTheTexturesMeanOverTheTexel) {
+  scenes::Scene scene = groundQuad("checker", 1.0f, 1.0f, 0.0f);
+  scenes::Texture checker;
+  checker.name = "checker";
+  checker.width = checker.height = 64;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      checker.texels.push_back(glm::vec4(glm::vec3(float(((x / 4) + (y / 4)) % 2)), 1.0f));
+  scene.textures.push_back(checker);
+  scene.materials[0].baseColorTexture.texture = 0;
+  scenes::Primitive& floor = scene.meshes[0].primitives[0];
+  for (const glm::vec3& p : floor.positions)
+    floor.uv0.push_back(glm::vec2(p.x, p.z) * 0.5f + 0.5f + 1.0f / 64.0f);
+  const Scene lit = unwrapped(std::move(scene), 4.0f);
+  auto tracer = buildOrDie(lit);
+  ASSERT_TRUE(tracer);
+  const TexelSet texels = texelsOrDie(lit, *tracer);
+  ClusterOptions options;
+  options.clusterSize = 0.1f;  // a texel a cluster: no averaging over neighbours
+  options.clusterTexels = 1.0f;
+  options.minTexels = 1;
+  const Clusters clusters = computeClusters(lit, nullptr, texels, nullptr, options);
+  ASSERT_EQ(clusters.size(), texels.size());
+  float lo = 1.0f, hi = 0.0f;
+  for (uint32_t c = 0; c < clusters.size(); ++c) {
+    lo = std::min(lo, clusters.albedo[c].x);
+    hi = std::max(hi, clusters.albedo[c].x);
+  }
+  std::printf("%u texels, %u clusters, albedo %.3f to %.3f (the checker's mean 0.5)\n", texels.size(), clusters.size(),
+              double(lo), double(hi));
+  EXPECT_GE(lo, 0.45f);
+  EXPECT_LE(hi, 0.55f);
 }
 
 }  // namespace
