@@ -112,6 +112,8 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--min-weight") options.links.minWeight = float(next());
     else if (arg == "--filter-reach") options.links.filterReach = float(next());
     else if (arg == "--filter-angle") options.links.filterMaxAngleDeg = float(next());
+    else if (arg == "--filter-light-ratio") options.links.filterLightRatio = float(next());
+    else if (arg == "--far-light-ratio") options.links.farLightRatio = float(next());
     else if (arg == "--no-light-match") options.links.lightMatch = false;
     else if (arg == "--light-samples") options.direct.lightSamples = int(next());
     else if (arg == "--emissive-samples") options.direct.emissiveSamples = int(next());

@@ -59,6 +59,28 @@ scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColo
   return scene;
 }
 
+scenes::Primitive box(glm::vec3 lo, glm::vec3 hi, int material) {
+  scenes::Primitive p;
+  p.material = material;
+  auto face = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 n) {
+    const uint32_t base = uint32_t(p.positions.size());
+    for (glm::vec3 v : {a, b, c, d}) {
+      p.positions.push_back(v);
+      p.normals.push_back(n);
+    }
+    // a b c d counter-clockwise seen from outside.
+    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) p.indices.push_back(base + i);
+  };
+  const glm::vec3 l = lo, h = hi;
+  face({h.x, l.y, h.z}, {h.x, l.y, l.z}, {h.x, h.y, l.z}, {h.x, h.y, h.z}, {1, 0, 0});
+  face({l.x, l.y, l.z}, {l.x, l.y, h.z}, {l.x, h.y, h.z}, {l.x, h.y, l.z}, {-1, 0, 0});
+  face({l.x, h.y, h.z}, {h.x, h.y, h.z}, {h.x, h.y, l.z}, {l.x, h.y, l.z}, {0, 1, 0});
+  face({l.x, l.y, l.z}, {h.x, l.y, l.z}, {h.x, l.y, h.z}, {l.x, l.y, h.z}, {0, -1, 0});
+  face({l.x, l.y, h.z}, {h.x, l.y, h.z}, {h.x, h.y, h.z}, {l.x, h.y, h.z}, {0, 0, 1});
+  face({h.x, l.y, l.z}, {l.x, l.y, l.z}, {l.x, h.y, l.z}, {h.x, h.y, l.z}, {0, 0, -1});
+  return p;
+}
+
 scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohmann::json& specular) {
   scenes::FurnaceOptions f;
   f.albedo = glm::vec3(baseColor);

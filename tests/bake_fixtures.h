@@ -20,6 +20,8 @@ BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options);
 // metallic 0: glTF's default is a metal) with this base colour and specularFactor.
 scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColor,
                          float specularFactor = 1.0f);
+// An axis-aligned closed box from lo to hi, outward normals, one primitive of `material`.
+scenes::Primitive box(glm::vec3 lo, glm::vec3 hi, int material);
 // The white furnace as a level: the procedural box (emission 1, base colour `baseColor`)
 // written through the exporter, its one material's KHR_materials_specular put into the JSON by
 // hand (when `specular` is not null), loaded back from the file and unwrapped at 4 texels/unit.

@@ -1,5 +1,7 @@
 #include "afterglow/baker/bake.h"
 
+#include "filter_light_edges.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,6 +11,7 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/baker/reference.h"
+#include "filter_light_edges.h"
 #include "lightmap_post.h"
 #include "sky_image.h"
 
@@ -77,25 +80,29 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   record("clusters", t0);
   if (cancelled()) return Status::error("cancelled");
 
+  // The direct light before the links: their far clusters' light check and the smoothing's
+  // read it (LinkOptions::farLightRatio, filterLightRatio).
   t0 = Clock::now();
-  Status st = computeLinks(scene, tracer, result.texels, gather.value(), result.clusters,
-                           options.links, tr, progress, far);
-  if (cancelled()) return Status::error("cancelled");
-  if (!st) return st;
-  record("links", t0);
-  gather = TexelGather();  // the hit codes are the bake's largest buffer
-
-  t0 = Clock::now();
-  st = computeDirect(scene, tracer, result.texels, result.clusters, options.direct, tr, progress);
+  Status st =
+      computeDirect(scene, tracer, result.texels, result.clusters, options.direct, tr, progress);
   if (cancelled()) return Status::error("cancelled");
   if (!st) return st;
   record("direct", t0);
 
+  t0 = Clock::now();
+  st = computeLinks(scene, tracer, result.texels, gather.value(), result.clusters, options.links,
+                    tr, progress, far);
+  if (cancelled()) return Status::error("cancelled");
+  if (!st) return st;
+  cutSmoothingAcrossLight(result.texels, options.links.filterLightRatio, tr);
+  record("links", t0);
+  gather = TexelGather();  // the hit codes are the bake's largest buffer
+
   if (!options.probes.positions.empty()) {
     t0 = Clock::now();
     st = computeProbeTransfer(scene, tracer, result.texels, result.clusters, far,
-                              options.links.farDistance, options.probes, options.probeOptions, tr,
-                              progress);
+                              options.links.farDistance, options.links.farLightRatio,
+                              options.probes, options.probeOptions, tr, progress);
     if (cancelled()) return Status::error("cancelled");
     if (!st) return st;
     record("probes", t0);

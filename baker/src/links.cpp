@@ -2,6 +2,7 @@
 // cluster, how clusters and texels read the gather points, and sky transfer, from the texels'
 // gather rays (and the back-side clusters' own rays).
 #include <algorithm>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <cmath>
@@ -269,8 +270,9 @@ struct FarGroups {
   uint32_t size() const { return uint32_t(start.size() - 1); }
 };
 
+template <class Alike>
 FarGroups shareFarFields(const RayTracer& tracer, const TexelSet& texels,
-                         const TexelGather& gather, int span) {
+                         const TexelGather& gather, int span, const Alike& alike) {
   const uint32_t points = gather.points();
   FarGroups out;
   out.ofPoint.assign(points, kNoTexel);
@@ -306,7 +308,7 @@ FarGroups shareFarFields(const RayTracer& tracer, const TexelSet& texels,
           open = true;
           continue;
         }
-        if (!sameSurface(texels, firstTexel(a), firstTexel(p))) continue;
+        if (!sameSurface(texels, firstTexel(a), firstTexel(p)) || !alike(a, p)) continue;
         if (!sightLine(texels, firstTexel(a), firstTexel(p), sights.emplace_back())) {
           sights.pop_back();
           anchor[p] = a;
@@ -342,12 +344,39 @@ FarGroups shareFarFields(const RayTracer& tracer, const TexelSet& texels,
 
 }  // namespace
 
+ClusterLight clusterLight(const runtime::TransportData& transport, float maxRatio) {
+  ClusterLight out;
+  if (!(maxRatio > 1.0f)) return out;
+  out.maxRatio = maxRatio;
+  const size_t clusters = transport.clusterCount;
+  auto add = [&](std::vector<float> values) {
+    double mean = 0.0;
+    for (float v : values) mean += double(v);
+    mean /= double(std::max<size_t>(values.size(), 1));
+    if (!(mean > 0.0)) return;  // a source that lights nothing cannot tell clusters apart
+    out.channels.push_back(std::move(values));
+    out.floors.push_back(float(0.05 * mean));
+  };
+  const size_t sources = std::min<size_t>(transport.sources.size(), 32);
+  for (size_t s = 0; s < sources; ++s)
+    if (transport.sources[s].kind == runtime::SourceKind::Light &&
+        transport.sources[s].clusterTransfer.size() == clusters)
+      add(transport.sources[s].clusterTransfer);
+  if (transport.clusterSky.size() == clusters * kShCount) {
+    std::vector<float> sky(clusters);
+    for (size_t c = 0; c < clusters; ++c)
+      sky[c] = runtime::halfToFloat(transport.clusterSky[c * kShCount]);
+    add(std::move(sky));
+  }
+  return out;
+}
+
 // Numbers the front far clusters level by level, fills farClusters (each the
 // area-weighted mix of the clusters its texels belong to, for those of several clusters) and
 // the targets. A far cluster's radius is the farthest of its texels' corners from its centre.
 FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
                       const std::vector<Clusters>& levels, float farDistance,
-                      runtime::SparseMatrix* farClusters) {
+                      runtime::SparseMatrix* farClusters, const ClusterLight& light) {
   FarTargets out;
   if (farClusters) *farClusters = runtime::SparseMatrix();
   if (!(farDistance > 0.0f)) return out;
@@ -371,11 +400,24 @@ FarTargets farTargets(const TexelSet& texels, const Clusters& clusters,
       }
       const float reach = farDistance * radius;
       out.reach2.push_back(reach * reach);
+      out.unlike.push_back(0);
       if (single && !entries.empty()) {
         out.target.push_back(entries[0].first);
         continue;
       }
       out.target.push_back(clusters.size() + out.rows++);
+      // A far cluster whose clusters are lit unlike each other is left to its finer levels.
+      bool alike = true;
+      for (size_t ch = 0; ch < light.channels.size() && alike; ++ch) {
+        const std::vector<float>& values = light.channels[ch];
+        float lo = std::numeric_limits<float>::infinity(), hi = 0.0f;
+        for (const auto& [member, a] : entries) {
+          lo = std::min(lo, values[member]);
+          hi = std::max(hi, values[member]);
+        }
+        alike = hi <= light.maxRatio * lo + light.floors[ch];
+      }
+      out.unlike.back() = alike ? 0 : 1;
       if (farClusters) farClusters->appendNormalisedRow(entries);
     }
   }
@@ -417,18 +459,36 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     const uint32_t t = code & TexelGather::kTexelMask;
     return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
   };
-  const FarTargets far =
-      farTargets(texels, clusters, farLevels, options.farDistance, &transport.farClusters);
-  // (Without far clusters there is no far field to share.)
-  const FarGroups groups =
-      shareFarFields(tracer, texels, gather, far.empty() ? 0 : options.sharedFarSpan);
-  const uint32_t sharedBase = transport.sharedFarBase();
-  const uint64_t targetCount = uint64_t(sharedBase) + groups.size();
-  if (targetCount > runtime::kMaxLinkTargets)
-    return Status::error(format(
-        "%llu clusters, far clusters and shared far fields, more than the transport's links can "
-        "address (%u): raise --cluster-size or --cluster-texels, or lower --texels-per-unit",
-        (unsigned long long)targetCount, runtime::kMaxLinkTargets));
+  // The front clusters' sky transfer, the area-weighted mean of their texels' (the back
+  // clusters' comes with their rays below); before the far targets, whose light check reads it.
+  auto memberArea = [&](size_t c) {
+    double area = 0.0;
+    for (uint32_t k = clusters.firstTexel[c]; k < clusters.firstTexel[c + 1]; ++k)
+      area += double(texels.area[clusters.memberTexels[k]]);
+    return area;
+  };
+  auto shareOf = [&](uint32_t t, double area, uint32_t members) {
+    return area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(members);
+  };
+  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0);
+  parallelFor(clusterCount, [&](size_t c) {
+    if (clusters.back[c]) return;
+    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
+    const double area = memberArea(c);
+    double sky[kShCount] = {};
+    for (uint32_t k = first; k < last; ++k) {
+      const uint32_t t = clusters.memberTexels[k];
+      if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
+      const double share = shareOf(t, area, last - first);
+      for (int i = 0; i < kShCount; ++i)
+        sky[i] += share * double(gather.sky[size_t(t) * kShCount + size_t(i)]);
+    }
+    for (int i = 0; i < kShCount; ++i)
+      transport.clusterSky[c * kShCount + size_t(i)] = runtime::floatToHalf(float(sky[i]));
+  }, 1024);
+  const ClusterLight light = clusterLight(transport, options.farLightRatio);
+  const FarTargets far = farTargets(texels, clusters, farLevels, options.farDistance,
+                                    &transport.farClusters, light);
   // What a gather point's ray from texel `from` links to: the coarsest far cluster of a front
   // hit seen from far enough (flagged kFarHit: the far field a group may share), else the
   // hit's cluster.
@@ -439,8 +499,12 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
       return clusterOf(code);
     const uint32_t t = code & TexelGather::kTexelMask;
     const glm::vec3 d = texels.position[t] - texels.position[from];
-    const uint32_t f = far.of(t, glm::dot(d, d));
-    return f != kNoTexel ? (f | kFarHit) : clusterOf(code);
+    bool seenFar = false;
+    const uint32_t f = far.of(t, glm::dot(d, d), &seenFar);
+    if (f != kNoTexel) return f | kFarHit;
+    // Seen from far, but in a far cluster lit unevenly: its own cluster, still far (sharable).
+    const uint32_t c = clusterOf(code);
+    return c != kNoTexel && seenFar ? (c | kFarHit) : c;
   };
   std::vector<uint32_t> backClusters;
   for (uint32_t c = 0; c < clusterCount; ++c)
@@ -481,6 +545,58 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
       }
     }
   };
+  // Per gather point and light channel, the mean light its far hits' targets receive
+  // directly (a far cluster: its clusters' area-weighted mean), for the far fields' sharing.
+  const size_t channels = light.channels.size();
+  std::vector<float> farLight;
+  if (channels > 0 && !far.empty() && options.sharedFarSpan > 1) {
+    const runtime::SparseMatrix& mix = transport.farClusters;
+    std::vector<float> targetLight(size_t(clusterCount + mix.rows()) * channels, 0.0f);
+    for (size_t ch = 0; ch < channels; ++ch) {
+      for (uint32_t c = 0; c < clusterCount; ++c)
+        targetLight[c * channels + ch] = light.channels[ch][c];
+      for (size_t f = 0; f < mix.rows(); ++f) {
+        double sum = 0.0;
+        for (uint32_t k = mix.rowStart[f]; k < mix.rowStart[f + 1]; ++k)
+          sum += double(mix.weight[k]) * double(light.channels[ch][mix.column[k]]);
+        targetLight[(clusterCount + f) * channels + ch] = float(sum);
+      }
+    }
+    farLight.assign(size_t(points) * channels, 0.0f);
+    parallelFor(points, [&](size_t p) {
+      if (gather.pointStart[p + 1] - gather.pointStart[p] != 1) return;  // only these share
+      std::vector<double> sum(channels, 0.0);
+      double weight = 0.0;
+      pointHits(uint32_t(p), [&](uint32_t c, double w, uint32_t, bool farHit) {
+        if (!farHit) return;
+        weight += w;
+        for (size_t ch = 0; ch < channels; ++ch)
+          sum[ch] += w * double(targetLight[c * channels + ch]);
+      });
+      if (weight > 0.0)
+        for (size_t ch = 0; ch < channels; ++ch)
+          farLight[p * channels + ch] = float(sum[ch] / weight);
+    }, 1024);
+  }
+  // Two points may share a far field when their far hits receive alike light in every channel.
+  auto farLitAlike = [&](uint32_t a, uint32_t b) {
+    if (farLight.empty()) return true;
+    for (size_t ch = 0; ch < channels; ++ch) {
+      const float x = farLight[a * channels + ch], y = farLight[b * channels + ch];
+      if (std::max(x, y) > light.maxRatio * std::min(x, y) + light.floors[ch]) return false;
+    }
+    return true;
+  };
+  // (Without far clusters there is no far field to share.)
+  const FarGroups groups = shareFarFields(tracer, texels, gather,
+                                          far.empty() ? 0 : options.sharedFarSpan, farLitAlike);
+  const uint32_t sharedBase = transport.sharedFarBase();
+  const uint64_t targetCount = uint64_t(sharedBase) + groups.size();
+  if (targetCount > runtime::kMaxLinkTargets)
+    return Status::error(format(
+        "%llu clusters, far clusters and shared far fields, more than the transport's links can "
+        "address (%u): raise --cluster-size or --cluster-texels, or lower --texels-per-unit",
+        (unsigned long long)targetCount, runtime::kMaxLinkTargets));
   // A point's row: its hits, except that a point sharing a far field links that field with
   // the weight of its own hits on far clusters instead of linking them one by one.
   auto pointRow = [&](uint32_t p, RowBuilder& row) {
@@ -545,7 +661,6 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   for (size_t i = 0; i < backClusters.size(); ++i)
     backStart[i + 1] = backStart[i] + backRayCount(backClusters[i]);
   std::vector<uint32_t> backCodes(backStart.back());
-  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0);
   const TexelLookup lookup(texels);
   const size_t rowCount = size_t(points) + backClusters.size();
   progress.begin("form factors", backClusters.size() + groups.size() + rowCount);
@@ -608,7 +723,7 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
             runtime::floatToHalf(gather.sky[t * kShCount + size_t(i)]);
   }, 4096);
   // What each cluster gathers: its texels' gather points, area-weighted (a back cluster: its
-  // own row), with the front clusters' sky transfer alike.
+  // own row).
   std::vector<uint32_t> backRowOf(clusterCount, kNoTexel);
   for (size_t i = 0; i < backClusters.size(); ++i)
     backRowOf[backClusters[i]] = points + uint32_t(i);
@@ -618,19 +733,12 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
       if (backRowOf[c] != kNoTexel) entries.emplace_back(backRowOf[c], 1.0f);
       return;
     }
-    double area = 0.0;
-    for (uint32_t k = first; k < last; ++k) area += double(texels.area[clusters.memberTexels[k]]);
-    double sky[kShCount] = {};
+    const double area = memberArea(c);
     for (uint32_t k = first; k < last; ++k) {
       const uint32_t t = clusters.memberTexels[k];
       if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
-      const double share = area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(last - first);
-      entries.emplace_back(gather.pointOfTexel[t], float(share));
-      for (int i = 0; i < kShCount; ++i)
-        sky[i] += share * double(gather.sky[size_t(t) * kShCount + size_t(i)]);
+      entries.emplace_back(gather.pointOfTexel[t], float(shareOf(t, area, last - first)));
     }
-    for (int i = 0; i < kShCount; ++i)
-      transport.clusterSky[c * kShCount + size_t(i)] = runtime::floatToHalf(float(sky[i]));
   }, blockRanges());
   // How texels read the gather points and how the points smooth each other, built by the
   // runtime from what the transport file stores (so a loaded file has the very same maps).

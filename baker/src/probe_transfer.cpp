@@ -306,6 +306,7 @@ class ProbeTracer {
 Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
                             const TexelSet& texels, const Clusters& clusters,
                             const std::vector<Clusters>& farLevels, float farDistance,
+                            float farLightRatio,
                             const runtime::ProbeTetrahedra& mesh, const ProbeOptions& options,
                             runtime::TransportData& transport, Progress& progress) {
   runtime::ProbeTransport& out = transport.probes;
@@ -333,7 +334,7 @@ Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
   // cluster stands in may differ.
   const FarTargets far = farTargets(texels, clusters, farLevels,
                                     options.farDistance > 0.0f ? options.farDistance : farDistance,
-                                    nullptr);
+                                    nullptr, clusterLight(transport, farLightRatio));
   if (far.rows != transport.farClusters.rows())
     return Status::error("computeProbeTransfer: the far clusters differ from the links'");
 

@@ -46,6 +46,13 @@ struct LinkOptions {
   // faster bounce). The far cluster's light is its clusters' mean, which differs from the hit
   // cluster's own by less the farther it is seen from. <= 0: every hit links its cluster.
   float farDistance = 2.0f;    // far cluster radii
+  // ... when the far cluster's clusters receive each light's direct light (and the sky's)
+  // alike, the largest within this ratio of the smallest (far_targets.h, ClusterLight); else a
+  // finer far cluster, or the hit's own cluster (still sharable as far). Also which gather
+  // points may share a far field (alike far light). Needs the lights' direct light in the
+  // transport. On Sponza-sun at 4 texels/m: bounced light 25.5% -> 22.2% RMSE against the
+  // reference, 8% more links (issue 16). <= 1: not checked.
+  float farLightRatio = 1.5f;
   // Shared far fields (runtime::TransportData::sharedFar): gather points of one texel (those
   // near other geometry, which gather alone with a full set of rays each) whose texels lie in
   // one square of sharedFarSpan texels a side, on one surface and in sight of each other, pool
@@ -80,6 +87,10 @@ struct LinkOptions {
   // onto its neighbours; on Sponza-sun 10° takes the bounced light's error from 28.7% to 25.6%
   // and changes nothing on flat walls (issue 16).
   float filterMaxAngleDeg = 10.0f;  // degrees
+  // ... and, for a texel that gathers alone, whose gather points' first bounce of each light
+  // (per unit light: geometry) lies within this ratio of each other (filter_light_edges.h).
+  // On Sponza-sun at 8 texels/m: bounced light 27.7% -> 24.4%. <= 1: not checked.
+  float filterLightRatio = 2.0f;
   // A gather ray's hit nearer than four texel edges takes the light of a texel that the same
   // punctual lights reach as the hit point (gather_rays.h, TexelOfHit::lightMatch), or none
   // when its own texel is lit where the hit point is in shadow.
@@ -150,11 +161,12 @@ struct ProbeOptions {
 // probes of `mesh`, after computeLinks and computeDirect have filled the transport: per probe,
 // rays over the sphere give the sky's transfer, the emissive surfaces seen and, region by
 // region, the links to the clusters (or the far clusters of `farLevels`, as computeLinks picks
-// them with `farDistance`) whose reflected light arrives; shadow rays give each light's.
-// Seeded from (probe, ray): deterministic for any thread count.
+// them with `farDistance` and `farLightRatio`) whose reflected light arrives; shadow rays give
+// each light's. Seeded from (probe, ray): deterministic for any thread count.
 Status computeProbeTransfer(const scenes::Scene& scene, const RayTracer& tracer,
                             const TexelSet& texels, const Clusters& clusters,
                             const std::vector<Clusters>& farLevels, float farDistance,
+                            float farLightRatio,
                             const runtime::ProbeTetrahedra& mesh, const ProbeOptions& options,
                             runtime::TransportData& transport, Progress& progress = nullProgress());
 

@@ -1,0 +1,92 @@
+#include "filter_light_edges.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "afterglow/core/parallel.h"
+#include "far_targets.h"
+
+namespace afterglow::baker {
+
+namespace {
+
+using runtime::kNoTexel;
+using runtime::SparseLinks;
+using runtime::TransportData;
+
+// Row r of `links` applied to `values` (padding entries are code 0: weight 0).
+double rowSum(const SparseLinks& links, size_t r, const std::vector<float>& values) {
+  double sum = 0.0;
+  for (size_t k = links.rowStart[r]; k < links.rowStart[r + 1]; ++k)
+    sum += double(links.weightAt(r, k)) * double(values[links.targetAt(k)]);
+  return sum;
+}
+
+// Every gather point's first bounce of one source, per unit source and unit albedo: the
+// clusters' received light `received` (per cluster) carried through the far clusters, the
+// shared far fields and the links, as the solver's first pass carries reflected light.
+std::vector<float> firstBounce(const TransportData& d, std::vector<float> received) {
+  const size_t clusters = d.clusterCount, far = d.farClusters.rows();
+  received.resize(d.linkTargetCount(), 0.0f);
+  parallelFor(far, [&](size_t f) {
+    double sum = 0.0;
+    for (uint32_t k = d.farClusters.rowStart[f]; k < d.farClusters.rowStart[f + 1]; ++k)
+      sum += double(d.farClusters.weight[k]) * double(received[d.farClusters.column[k]]);
+    received[clusters + f] = float(sum);
+  }, 4096);
+  const size_t base = d.sharedFarBase();
+  parallelFor(d.sharedFar.rows(), [&](size_t s) {
+    received[base + s] = float(rowSum(d.sharedFar, s, received));
+  }, 1024);
+  std::vector<float> gathered(d.gatherPointCount, 0.0f);
+  parallelFor(d.gatherPointCount, [&](size_t p) {
+    gathered[p] = float(rowSum(d.links, p, received));
+  }, 1024);
+  return gathered;
+}
+
+}  // namespace
+
+void cutSmoothingAcrossLight(const TexelSet& texels, float maxRatio, TransportData& d) {
+  if (!(maxRatio > 1.0f) || d.texelNeighbours.size() != texels.size()) return;
+  const ClusterLight light = clusterLight(d, maxRatio);
+  const size_t count = texels.size();
+  // Only texels that gather alone (near other geometry) are checked: there light changes
+  // within a texel or two and their many rays make the first bounce precise. Between two
+  // points of 2×2 blocks the check measurably makes things worse: their first bounces differ
+  // by noise, which is what the smoothing is for.
+  std::vector<uint32_t> texelsOfPoint(d.gatherPointCount, 0);
+  for (uint32_t p : d.texelPoint)
+    if (p != kNoTexel) ++texelsOfPoint[p];
+  auto alone = [&](size_t t) { return texelsOfPoint[d.texelPoint[t]] == 1; };
+  std::vector<uint8_t> cut(count, 0);
+  for (const std::vector<float>& received : light.channels) {
+    const std::vector<float> v = firstBounce(d, received);
+    // Differences below a fifth of the mean first bounce do not count: dim texels' own noise.
+    double mean = 0.0;
+    for (float x : v) mean += double(x);
+    const float floor = float(0.2 * mean / double(std::max<size_t>(v.size(), 1)));
+    parallelFor(count, [&](size_t t) {
+      const uint8_t marks = d.texelNeighbours[t];
+      if (!marks || d.texelPoint[t] == kNoTexel) return;
+      const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+      const float own = v[d.texelPoint[t]];
+      for (int k = 0; k < 8; ++k) {
+        if (!(marks & (1u << k))) continue;
+        const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[k][0];
+        const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[k][1];
+        const uint32_t n = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
+        if (n == kNoTexel || d.texelPoint[n] == kNoTexel || (!alone(t) && !alone(n))) continue;
+        const float other = v[d.texelPoint[n]];
+        if (std::max(own, other) > maxRatio * std::min(own, other) + floor)
+          cut[t] |= uint8_t(1u << k);
+      }
+    }, 4096);
+  }
+  // The test is symmetric, so the marks stay symmetric.
+  for (size_t t = 0; t < count; ++t) d.texelNeighbours[t] &= uint8_t(~cut[t]);
+  runtime::buildGatherMaps(d, blockRanges());
+}
+
+}  // namespace afterglow::baker

@@ -1,0 +1,28 @@
+// The bounced light's smoothing kept from crossing a change in what light a texel's rays reach
+// (issue 16): after the links, a texel near other geometry (one that gathers alone) stops
+// smoothing with an atlas neighbour when one of their gather points gathers a first bounce of
+// some source (each light, the sky: far_targets.h, ClusterLight) more
+// than LinkOptions::filterLightRatio times the other's.
+//
+// Why: the smoothing's edge test is geometric (one surface, normals alike, within half the
+// harmonic ray distance, in sight). On Sponza-sun at 8 texels/m a wall texel 8 cm behind a
+// drape gathers a tenth of what its neighbour 7 cm away gathers past the drape's edge: both
+// pass that test, and the smoothing made the first 12x too bright, the worst texel of the
+// level against the reference path tracer. Each gather point's first bounce of each source,
+// per unit source, is geometry (which clusters its rays reach and how much of each source
+// those clusters receive), so the cut does not change when light colours, intensities,
+// albedos or the sky change: relight still equals rebake.
+#pragma once
+
+#include "afterglow/baker/texels.h"
+#include "afterglow/runtime/transport.h"
+
+namespace afterglow::baker {
+
+// Clears the marks of transport.texelNeighbours between texels whose gather points differ
+// like that, and rebuilds the gather maps from them. Needs the links, far clusters, shared far
+// fields, sky transfer and the sources' cluster transfer. maxRatio <= 1: nothing changes.
+void cutSmoothingAcrossLight(const TexelSet& texels, float maxRatio,
+                             runtime::TransportData& transport);
+
+}  // namespace afterglow::baker
