@@ -6,7 +6,9 @@
 //       [--near-rays N] [--near-distance X] [--near-field X] [--block-distance X]
 //       [--cluster-size M] [--cluster-texels N] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
 //       [--far-levels N] [--far-scale X] [--far-distance X] [--shared-far-span N] [--shared-far-points X]
-//       [--filter-passes N] [--filter-reach X] [--filter-angle DEG] [--no-light-match] [--min-weight W] [--light-samples N] [--emissive-samples N]
+//       [--filter-passes N] [--filter-reach X] [--filter-angle DEG] [--filter-light-ratio R]
+//       [--far-light-ratio R] [--shared-far-light-ratio R] [--no-light-match] [--min-weight W]
+//       [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]] [--repeat N] [--single-sided-emission]
 //       [--reference-cache FILE] [--breakdown RAYS]
 // SCENE defaults to the Cornell box of ../shared/scenes; --spp 0 only times the bake; --repeat
@@ -114,6 +116,7 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--filter-angle") options.links.filterMaxAngleDeg = float(next());
     else if (arg == "--filter-light-ratio") options.links.filterLightRatio = float(next());
     else if (arg == "--far-light-ratio") options.links.farLightRatio = float(next());
+    else if (arg == "--shared-far-light-ratio") options.links.sharedFarLightRatio = float(next());
     else if (arg == "--no-light-match") options.links.lightMatch = false;
     else if (arg == "--light-samples") options.direct.lightSamples = int(next());
     else if (arg == "--emissive-samples") options.direct.emissiveSamples = int(next());

@@ -57,7 +57,8 @@ void dropWeakLinks(float minWeight, std::vector<Link>& row) {
 class RowBuilder {
  public:
   explicit RowBuilder(uint32_t clusters)
-      : sum_(clusters, 0.0), touched_((size_t(clusters) + 63) / 64, 0), words_(touched_.size()) {}
+      : sum_(clusters, 0.0), touched_((size_t(clusters) + 63) / 64, 0),
+        words_(touched_.size() + 1) {}  // + 1: add() writes one past the words counted
 
   void add(uint32_t cluster, double weight) {
     // The word's index is always written and only counted when the word was empty: no branch
@@ -549,7 +550,8 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   // directly (a far cluster: its clusters' area-weighted mean), for the far fields' sharing.
   const size_t channels = light.channels.size();
   std::vector<float> farLight;
-  if (channels > 0 && !far.empty() && options.sharedFarSpan > 1) {
+  if (channels > 0 && !far.empty() && options.sharedFarSpan > 1 &&
+      options.sharedFarLightRatio > 1.0f) {
     const runtime::SparseMatrix& mix = transport.farClusters;
     std::vector<float> targetLight(size_t(clusterCount + mix.rows()) * channels, 0.0f);
     for (size_t ch = 0; ch < channels; ++ch) {
@@ -578,12 +580,14 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
           farLight[p * channels + ch] = float(sum[ch] / weight);
     }, 1024);
   }
-  // Two points may share a far field when their far hits receive alike light in every channel.
+  // Two points may share a far field when their far hits receive alike light in every channel
+  // (LinkOptions::sharedFarLightRatio).
+  const float shareRatio = options.sharedFarLightRatio;
   auto farLitAlike = [&](uint32_t a, uint32_t b) {
     if (farLight.empty()) return true;
     for (size_t ch = 0; ch < channels; ++ch) {
       const float x = farLight[a * channels + ch], y = farLight[b * channels + ch];
-      if (std::max(x, y) > light.maxRatio * std::min(x, y) + light.floors[ch]) return false;
+      if (std::max(x, y) > shareRatio * std::min(x, y) + light.floors[ch]) return false;
     }
     return true;
   };
