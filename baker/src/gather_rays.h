@@ -167,30 +167,39 @@ struct TexelOfHit {
 
   // Texel t, or the texel whose light a hit should take instead: when the lights that reach
   // the hit point (lifted off its surface like t's sample) are not those that reach t's
-  // sample, the nearest valid texel of t's chart within two texels that is lit like the hit
-  // point and that the hit point sees. With none: kNoTexel (absorbed) when a light reaches t's
+  // sample, or are but t's footprint is lit unevenly (its cluster reflects the footprint's
+  // mean, LightVisibility::kUneven), the nearest valid texel of t's chart within two texels
+  // that is lit like the hit point, evenly if one is, and that the hit point sees. With none:
+  // t when its sample is lit like the hit point; kNoTexel (absorbed) when a light reaches t's
   // sample but not the hit point, for a sunlit sample must not light a shadowed contact, whose
   // own light is the little that bounced into it; else t.
   static uint32_t lightMatch(const RayTracer& tracer, const TexelSet& texels,
                              const TexelLookup& lookup, uint32_t t, const Hit& hit,
                              glm::vec3 hitPoint) {
+    constexpr uint32_t kUneven = LightVisibility::kUneven;
     const glm::vec3 origin = from(texels, t, hit, hitPoint);
     const uint32_t want = lookup.lights()->at(tracer, origin, hit.geometricNormal);
     const std::vector<uint32_t>& reached = lookup.reached();
-    if (want == reached[t]) return t;
-    uint32_t best = runtime::kNoTexel;
-    float bestDistance = std::numeric_limits<float>::infinity();
+    if (want == reached[t]) return t;  // lit alike, evenly
+    const uint32_t own = reached[t] & ~kUneven;
+    // The nearest in sight lit like the hit point: [0] evenly, [1] unevenly.
+    uint32_t best[2] = {runtime::kNoTexel, runtime::kNoTexel};
+    float bestDistance[2] = {std::numeric_limits<float>::infinity(),
+                             std::numeric_limits<float>::infinity()};
     forChartNeighbours(texels, t, 2, [&](uint32_t n) {
-      if (reached[n] != want) return;
+      if ((reached[n] & ~kUneven) != want) return;
+      const int k = (reached[n] & kUneven) ? 1 : 0;
       const float distance = glm::length(texels.position[n] - origin);
-      if (distance >= bestDistance) return;
+      if (distance >= bestDistance[k]) return;
       Ray line;
       if (sightLine(texels, t, hit, hitPoint, n, line) && tracer.occluded(line)) return;
-      bestDistance = distance;
-      best = n;
+      bestDistance[k] = distance;
+      best[k] = n;
     });
-    if (best != runtime::kNoTexel) return best;
-    return (reached[t] & ~want) ? runtime::kNoTexel : t;
+    if (best[0] != runtime::kNoTexel) return best[0];
+    if (want == own) return t;
+    if (best[1] != runtime::kNoTexel) return best[1];
+    return (own & ~want) ? runtime::kNoTexel : t;
   }
 
  private:

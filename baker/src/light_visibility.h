@@ -10,7 +10,13 @@
 //
 // One hard shadow ray toward each light's centre (a directional light's direction, a point or
 // spot light's position; outside a spot's outer cone, past a light's range, or behind the
-// surface counts as unreached); the first 32 lights. Emissive surfaces are not in the set.
+// surface counts as unreached); the first 31 lights. Emissive surfaces are not in the set.
+//
+// Per texel also whether its footprint is lit evenly (kUneven when a point of it is reached by
+// other lights than its sample): a front cluster reflects its texels' light averaged over
+// their footprints (direct.cpp), so a hit lit like its texel's sample should still take an
+// evenly lit neighbour's light when the texel is partly shadowed (a floor texel half in a
+// wall's contact shadow reflects half its sample's sunlight).
 #pragma once
 
 #include <algorithm>
@@ -29,9 +35,11 @@ namespace afterglow::baker {
 
 class LightVisibility {
  public:
+  static constexpr uint32_t kUneven = 1u << 31;  // texels(): the footprint is lit unevenly
+
   explicit LightVisibility(const scenes::Scene& scene) {
     for (const scenes::Light& l : scene.lights)
-      if (lights_.size() < 32) lights_.push_back(l);
+      if (lights_.size() < 31) lights_.push_back(l);
   }
   bool empty() const { return lights_.empty(); }
 
@@ -62,12 +70,21 @@ class LightVisibility {
     return bits;
   }
 
-  // Every texel's, at its sample on its front side (0 for every texel without lights).
+  // Every texel's, at its sample on its front side (0 for every texel without lights), with
+  // kUneven when a point of its footprint (footprintPoints) is reached by other lights.
   std::vector<uint32_t> texels(const RayTracer& tracer, const TexelSet& texels) const {
     std::vector<uint32_t> out(texels.size(), 0);
     if (empty()) return out;
     parallelFor(texels.size(), [&](size_t t) {
-      out[t] = at(tracer, texels.position[t], texels.geometricNormal[t]);
+      const uint32_t own = at(tracer, texels.position[t], texels.geometricNormal[t]);
+      out[t] = own;
+      glm::vec3 points[16];
+      const int n = footprintPoints(tracer.scene(), texels, uint32_t(t), points);
+      for (int i = 0; i < n; ++i)
+        if (at(tracer, points[i], texels.geometricNormal[t]) != own) {
+          out[t] |= kUneven;
+          break;
+        }
     }, 1024);
     return out;
   }

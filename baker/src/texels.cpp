@@ -472,4 +472,39 @@ uint32_t texelAtUv(const scenes::Scene& scene, const TexelSet& texels, uint32_t 
   return best;
 }
 
+int footprintPoints(const scenes::Scene& scene, const TexelSet& texels, uint32_t t,
+                    glm::vec3 out[16]) {
+  const scenes::Instance& inst = scene.instances[texels.instance[t]];
+  const scenes::Primitive& prim = scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]];
+  const size_t first = size_t(texels.triangle[t]) * 3;
+  if (prim.uv1.size() != prim.positions.size() || first + 2 >= prim.indices.size() ||
+      inst.lightmap.width <= 0)
+    return 0;
+  const glm::dvec2 size(inst.lightmap.width, inst.lightmap.height);
+  glm::dvec2 px[3];
+  glm::dvec3 q[3];
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t v = prim.indices[first + size_t(k)];
+    px[k] = glm::dvec2(prim.uv1[v]) * size;
+    q[k] = glm::dvec3(inst.transform * glm::vec4(prim.positions[v], 1.0f));
+  }
+  const glm::dmat2 pixels(px[1] - px[0], px[2] - px[0]);
+  if (!(std::abs(glm::determinant(pixels)) > 1e-12)) return 0;
+  const glm::dmat2 toBarycentric = glm::inverse(pixels);
+  const glm::dvec3 lift = glm::dvec3(texels.geometricNormal[t]) * double(texels.offset[t]);
+  const glm::dvec2 centre = glm::dvec2(texels.pixel[t]) + 0.5;
+  constexpr int kSide = 4;
+  constexpr double kInside = -1e-3;  // barycentric tolerance
+  int n = 0;
+  for (int y = 0; y < kSide; ++y)
+    for (int x = 0; x < kSide; ++x) {
+      const glm::dvec2 d((double(x) + 0.5) / kSide - 0.5, (double(y) + 0.5) / kSide - 0.5);
+      const glm::dvec2 b = toBarycentric * (centre + d - px[0]);
+      if (b.x < kInside || b.y < kInside || 1.0 - b.x - b.y < kInside) continue;
+      out[n++] = glm::vec3(q[0] + b.x * (q[1] - q[0]) + b.y * (q[2] - q[0]) + lift);
+    }
+  return n;
+}
+
+
 }  // namespace afterglow::baker

@@ -65,6 +65,11 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
 
 // The glTF material index of a texel's primitive (-1: the default material) and whether that
 // material is double-sided.
+// Up to 16 world points spread over texel t's footprint: a 4 × 4 grid over its atlas pixel
+// mapped through its triangle (TEXCOORD_1 in pixels to world), those that fall inside the
+// triangle, lifted off it like the sample. Returns how many (0 without lightmap UVs).
+int footprintPoints(const scenes::Scene& scene, const TexelSet& texels, uint32_t t,
+                    glm::vec3 out[16]);
 int texelMaterial(const scenes::Scene& scene, const TexelSet& texels, uint32_t t);
 bool texelDoubleSided(const scenes::Scene& scene, const TexelSet& texels, uint32_t t);
 
