@@ -12,8 +12,8 @@
 // spot light's position; outside a spot's outer cone, past a light's range, or behind the
 // surface counts as unreached); the first 31 lights. Emissive surfaces are not in the set.
 //
-// Per texel also whether its footprint is lit evenly (kUneven when a point of it is reached by
-// other lights than its sample): a front cluster reflects its texels' light averaged over
+// Per texel also whether its footprint is lit evenly (kUneven when one of four points of it is
+// reached by other lights than its sample): a front cluster reflects its texels' light averaged over
 // their footprints (direct.cpp), so a hit lit like its texel's sample should still take an
 // evenly lit neighbour's light when the texel is partly shadowed (a floor texel half in a
 // wall's contact shadow reflects half its sample's sunlight).
@@ -78,9 +78,11 @@ class LightVisibility {
     parallelFor(texels.size(), [&](size_t t) {
       const uint32_t own = at(tracer, texels.position[t], texels.geometricNormal[t]);
       out[t] = own;
+      // Every fifth of the footprint's points (its grid's diagonal, or as many as fall inside
+      // the triangle, spread): an uneven footprint is rarely lit evenly along all of them.
       glm::vec3 points[16];
       const int n = footprintPoints(tracer.scene(), texels, uint32_t(t), points);
-      for (int i = 0; i < n; ++i)
+      for (int i = 0; i < n; i += n > 4 ? 5 : 1)
         if (at(tracer, points[i], texels.geometricNormal[t]) != own) {
           out[t] |= kUneven;
           break;

@@ -24,7 +24,13 @@ glm::vec4 Texture::sample(glm::vec2 uv) const {
   const float y = wrapCoord(uv.y) * float(height) - 0.5f;
   const float fx0 = std::floor(x), fy0 = std::floor(y);
   const float fx = x - fx0, fy = y - fy0;
-  auto wrapIndex = [](int i, int n) { return ((i % n) + n) % n; };
+  // i is within [-1, n - 1] here (x, y in [-0.5, n - 0.5]): no division on that path, which
+  // the lightmap's footprint albedo runs 16 times a texel.
+  auto wrapIndex = [](int i, int n) {
+    if (i >= 0 && i < n) return i;
+    if (i == -1 || i == n) return i == -1 ? n - 1 : 0;
+    return ((i % n) + n) % n;
+  };
   const int x0 = wrapIndex(int(fx0), width), x1 = wrapIndex(int(fx0) + 1, width);
   const int y0 = wrapIndex(int(fy0), height), y1 = wrapIndex(int(fy0) + 1, height);
   auto at = [&](int xi, int yi) { return texels[size_t(yi) * size_t(width) + size_t(xi)]; };
