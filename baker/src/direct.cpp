@@ -402,12 +402,12 @@ Status computeDirect(const scenes::Scene& scene, const RayTracer& tracer, const 
   std::vector<std::vector<float>> footprint(lightCount);
   for (size_t k = 0; k < lightCount; ++k) footprint[k] = transport.sources[k].texelTransfer;
   constexpr uint32_t kFootprintSamples = 1u << 20;  // sample numbers apart from the passes'
-  progress.begin("direct light (footprints)", texelCount);
-  parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
+  if (lightCount > 0) progress.begin("direct light (footprints)", texelCount);
+  if (lightCount > 0) parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
     ShadowRays batch;
     glm::vec3 points[16];
     for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
-      if (!texels.valid[t] || lightCount == 0) continue;
+      if (!texels.valid[t]) continue;
       const int n = footprintPoints(scene, texels, uint32_t(t), points);
       if (n == 0) continue;
       for (size_t k = 0; k < lightCount; ++k) {
@@ -422,7 +422,7 @@ Status computeDirect(const scenes::Scene& scene, const RayTracer& tracer, const 
     }
     progress.advance(end - begin);
   }, kTexelsPerBlock);
-  progress.end();
+  if (lightCount > 0) progress.end();
   if (progress.cancelled()) return Status::error("computeDirect: cancelled");
 
   // Cluster transfer: area-weighted mean over the cluster's valid texels. A back-side cluster

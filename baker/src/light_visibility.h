@@ -12,11 +12,11 @@
 // spot light's position; outside a spot's outer cone, past a light's range, or behind the
 // surface counts as unreached); the first 31 lights. Emissive surfaces are not in the set.
 //
-// Per texel also whether its footprint is lit evenly (kUneven when one of four points of it is
-// reached by other lights than its sample): a front cluster reflects its texels' light averaged over
-// their footprints (direct.cpp), so a hit lit like its texel's sample should still take an
-// evenly lit neighbour's light when the texel is partly shadowed (a floor texel half in a
-// wall's contact shadow reflects half its sample's sunlight).
+// Per texel also whether its footprint is lit evenly (kUneven when one of four points of it
+// is reached by other lights than its sample): a front cluster reflects its texels' light
+// averaged over their footprints (direct.cpp), so a hit lit like its texel's sample should
+// still take an evenly lit neighbour's light when the texel is partly shadowed (a floor texel
+// half in a wall's contact shadow reflects half its sample's sunlight).
 #pragma once
 
 #include <algorithm>
@@ -71,7 +71,8 @@ class LightVisibility {
   }
 
   // Every texel's, at its sample on its front side (0 for every texel without lights), with
-  // kUneven when a point of its footprint (footprintPoints) is reached by other lights.
+  // kUneven when one of four points of its footprint (footprintPoints) is reached by other
+  // lights.
   std::vector<uint32_t> texels(const RayTracer& tracer, const TexelSet& texels) const {
     std::vector<uint32_t> out(texels.size(), 0);
     if (empty()) return out;

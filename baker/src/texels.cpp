@@ -475,7 +475,8 @@ uint32_t texelAtUv(const scenes::Scene& scene, const TexelSet& texels, uint32_t 
 int footprintPoints(const scenes::Scene& scene, const TexelSet& texels, uint32_t t,
                     glm::vec3 out[16]) {
   const scenes::Instance& inst = scene.instances[texels.instance[t]];
-  const scenes::Primitive& prim = scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]];
+  const scenes::Primitive& prim =
+      scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]];
   const size_t first = size_t(texels.triangle[t]) * 3;
   if (prim.uv1.size() != prim.positions.size() || first + 2 >= prim.indices.size() ||
       inst.lightmap.width <= 0)
