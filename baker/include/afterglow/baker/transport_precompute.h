@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "afterglow/baker/clusters.h"
@@ -30,12 +31,16 @@ struct LinkOptions {
   int texelRays = 128;
   // Texels close to other geometry (harmonic ray distance under nearDistance texel edges: the
   // corners of a room, the floor along a box) see light that changes fast over short
-  // distances, which a gather point's rays resolve poorly; they cast nearRays more, which count for what
-  // they hit within nearField texel edges (farther light changes slowly and the first rays
-  // sample it well enough; leaving those hits out keeps the links few).
+  // distances, which a gather point's rays resolve poorly; they cast nearRays more, which
+  // count for what they hit within nearField texel edges (a finite reach leaves the far hits
+  // to the first rays and keeps the links few). By default they count for everything: such a
+  // texel in a dark corner that sees a sunlit floor far off through a gap is the gather's
+  // noisiest, and on Sponza-sun counting them takes the bounced light's error from 17.7% to
+  // 16.7% at 4 texels/m and 18.9% to 17.5% at 8, for 13% and 8% more links (at 8 or 32
+  // edges nothing changes: the gain is in hits beyond 8 m).
   int nearRays = 192;
   float nearDistance = 2.0f;   // texel edges
-  float nearField = 8.0f;      // texel edges
+  float nearField = std::numeric_limits<float>::infinity();  // texel edges
   // Texels whose harmonic ray distance is under this many texel edges gather alone, with a
   // full set of rays, instead of sharing a 2×2 block's: bounced light changes over a few
   // texels there.
