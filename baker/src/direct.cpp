@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -404,21 +405,45 @@ Status computeDirect(const scenes::Scene& scene, const RayTracer& tracer, const 
   constexpr uint32_t kFootprintSamples = 1u << 20;  // sample numbers apart from the passes'
   if (lightCount > 0) progress.begin("direct light (footprints)", texelCount);
   if (lightCount > 0) parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
-    ShadowRays batch;
+    // A texel's rays, all lights' together, traced as one stream (one by one they ran at half
+    // Embree's rate). Sample i of light k is the one punctualPass would draw as its
+    // (kFootprintSamples + i)-th.
     glm::vec3 points[16];
+    std::vector<Ray> rays;
+    std::vector<float> transfer;  // per ray: its point's unshadowed transfer
+    std::vector<uint32_t> lightOf;
+    std::unique_ptr<bool[]> blocked(new bool[16 * lightCount]);
+    const sampling::Stratified one{1};
     for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
       if (!texels.valid[t]) continue;
       const int n = footprintPoints(scene, texels, uint32_t(t), points);
       if (n == 0) continue;
+      rays.clear();
+      transfer.clear();
+      lightOf.clear();
+      const sampling::Rng::ItemSeed seed{
+          sampling::Rng::itemSeed(sampling::Stream::LightVisibility, t)};
       for (size_t k = 0; k < lightCount; ++k) {
-        double sum = 0.0;
+        const scenes::Light& light = scene.lights[k];
         for (int i = 0; i < n; ++i) {
-          const Receiver r{points[i], texels.normal[t], texels.geometricNormal[t]};
-          sum += punctualPass(tracer, scene.lights[k], uint32_t(k), r, t, 1,
-                              kFootprintSamples + uint32_t(i), batch).transfer;
+          const LightView view = viewLight(light, points[i], texels.normal[t]);
+          if (!(view.transfer > 0.0f)) continue;
+          sampling::Rng rng(seed, (uint64_t(k) << 32) | (kFootprintSamples + uint32_t(i)));
+          Ray ray;
+          lightShadowRay(light, view, points[i], one.point(rng, 0), &ray.direction, &ray.tfar);
+          if (glm::dot(ray.direction, texels.geometricNormal[t]) <= 0.0f) continue;  // below
+          ray.origin = points[i];
+          ray.mask = kMaskShadowCasters;
+          rays.push_back(ray);
+          transfer.push_back(view.transfer);
+          lightOf.push_back(uint32_t(k));
         }
-        footprint[k][t] = float(sum / double(n));
       }
+      tracer.occluded(rays.data(), blocked.get(), rays.size());
+      std::vector<double> sum(lightCount, 0.0);
+      for (size_t j = 0; j < rays.size(); ++j)
+        if (!blocked[j]) sum[lightOf[j]] += double(transfer[j]);
+      for (size_t k = 0; k < lightCount; ++k) footprint[k][t] = float(sum[k] / double(n));
     }
     progress.advance(end - begin);
   }, kTexelsPerBlock);
