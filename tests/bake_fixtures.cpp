@@ -81,6 +81,18 @@ scenes::Primitive box(glm::vec3 lo, glm::vec3 hi, int material) {
   return p;
 }
 
+void addBox(scenes::Scene& scene, const std::string& name, glm::vec3 lo, glm::vec3 hi,
+            int material) {
+  scenes::Mesh mesh;
+  mesh.name = name;
+  mesh.primitives.push_back(box(lo, hi, material));
+  scene.meshes.push_back(mesh);
+  scenes::Instance inst;
+  inst.name = name;
+  inst.mesh = int(scene.meshes.size()) - 1;
+  scene.instances.push_back(inst);
+}
+
 scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohmann::json& specular) {
   scenes::FurnaceOptions f;
   f.albedo = glm::vec3(baseColor);

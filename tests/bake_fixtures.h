@@ -22,6 +22,9 @@ scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColo
                          float specularFactor = 1.0f);
 // An axis-aligned closed box from lo to hi, outward normals, one primitive of `material`.
 scenes::Primitive box(glm::vec3 lo, glm::vec3 hi, int material);
+// Adds such a box to `scene` as a mesh and a static instance, both called `name`.
+void addBox(scenes::Scene& scene, const std::string& name, glm::vec3 lo, glm::vec3 hi,
+            int material);
 // The white furnace as a level: the procedural box (emission 1, base colour `baseColor`)
 // written through the exporter, its one material's KHR_materials_specular put into the JSON by
 // hand (when `specular` is not null), loaded back from the file and unwrapped at 4 texels/unit.

@@ -24,14 +24,7 @@ scenes::Scene wallInTheSun(float face) {
   scenes::Material wall = scene.materials[0];
   wall.name = "wall";
   scene.materials.push_back(wall);
-  scenes::Mesh mesh;
-  mesh.name = "wall";
-  mesh.primitives.push_back(box({face - 0.2f, 0.0f, -1.5f}, {face, 1.0f, 1.5f}, 1));
-  scene.meshes.push_back(mesh);
-  scenes::Instance inst;
-  inst.name = "wall";
-  inst.mesh = 1;
-  scene.instances.push_back(inst);
+  addBox(scene, "wall", {face - 0.2f, 0.0f, -1.5f}, {face, 1.0f, 1.5f}, 1);
   // Travelling down and 3° toward +x: the wall's +x face is in shade, and its top edge shades
   // the floor up to tan 3° = 5.2 cm from the face.
   scenes::Light sun;

@@ -20,19 +20,9 @@ namespace {
 // slit of `width` metres from x = `from`, or without a roof.
 scenes::Scene floorUnderASlit(bool roof, float from, float width) {
   scenes::Scene scene = groundQuad("floor", 2.0f, 0.8f, 0.0f);
-  auto add = [&](const char* name, glm::vec3 lo, glm::vec3 hi) {
-    scenes::Mesh mesh;
-    mesh.name = name;
-    mesh.primitives.push_back(box(lo, hi, 0));
-    scene.meshes.push_back(mesh);
-    scenes::Instance inst;
-    inst.name = name;
-    inst.mesh = int(scene.meshes.size()) - 1;
-    scene.instances.push_back(inst);
-  };
   if (roof) {
-    add("roof_west", {-2.5f, 1.0f, -2.5f}, {from, 1.1f, 2.5f});
-    add("roof_east", {from + width, 1.0f, -2.5f}, {2.5f, 1.1f, 2.5f});
+    addBox(scene, "roof_west", {-2.5f, 1.0f, -2.5f}, {from, 1.1f, 2.5f}, 0);
+    addBox(scene, "roof_east", {from + width, 1.0f, -2.5f}, {2.5f, 1.1f, 2.5f}, 0);
   }
   scenes::Light sun;
   sun.name = "sun";

@@ -20,18 +20,8 @@ scenes::Scene drapeInTheSun() {
   scenes::Material wall = scene.materials[0];
   wall.name = "wall";
   scene.materials.push_back(wall);
-  auto add = [&](const char* name, glm::vec3 lo, glm::vec3 hi) {
-    scenes::Mesh mesh;
-    mesh.name = name;
-    mesh.primitives.push_back(box(lo, hi, 1));
-    scene.meshes.push_back(mesh);
-    scenes::Instance inst;
-    inst.name = name;
-    inst.mesh = int(scene.meshes.size()) - 1;
-    scene.instances.push_back(inst);
-  };
-  add("wall", {-0.2f, 0.0f, -2.0f}, {0.0f, 2.5f, 2.0f});
-  add("drape", {0.08f, 0.0f, -2.0f}, {0.09f, 2.3f, 0.0f});
+  addBox(scene, "wall", {-0.2f, 0.0f, -2.0f}, {0.0f, 2.5f, 2.0f}, 1);
+  addBox(scene, "drape", {0.08f, 0.0f, -2.0f}, {0.09f, 2.3f, 0.0f}, 1);
   // From high up over +x: the floor in front of the wall is in the sun but for the drape's
   // shadow, the floor behind the wall in the wall's for 1.25 m, and in the sun beyond.
   scenes::Light sun;
