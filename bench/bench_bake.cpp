@@ -117,6 +117,9 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--filter-light-ratio") options.links.filterLightRatio = float(next());
     else if (arg == "--far-light-ratio") options.links.farLightRatio = float(next());
     else if (arg == "--shared-far-light-ratio") options.links.sharedFarLightRatio = float(next());
+    else if (arg == "--refine-error") options.links.refineError = float(next());
+    else if (arg == "--refine-rays") options.links.refineRays = int(next());
+    else if (arg == "--albedo-detail") options.links.albedoDetail = float(next());
     else if (arg == "--no-light-match") options.links.lightMatch = false;
     else if (arg == "--light-samples") options.direct.lightSamples = int(next());
     else if (arg == "--emissive-samples") options.direct.emissiveSamples = int(next());

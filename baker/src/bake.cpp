@@ -90,6 +90,13 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
   record("direct", t0);
 
   t0 = Clock::now();
+  st = refineGather(scene, tracer, result.texels, result.clusters, tr, options.links,
+                    gather.value(), progress);
+  if (cancelled()) return Status::error("cancelled");
+  if (!st) return st;
+  record("refine", t0);
+
+  t0 = Clock::now();
   st = computeLinks(scene, tracer, result.texels, gather.value(), result.clusters, options.links,
                     tr, progress, far);
   if (cancelled()) return Status::error("cancelled");

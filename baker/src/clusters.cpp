@@ -20,19 +20,23 @@ using runtime::kNoTexel;
 
 constexpr float kPi = 3.14159265358979323846f;
 
-glm::vec3 textureRgb(const scenes::Scene& scene, const scenes::TextureRef& ref, glm::vec2 uv0) {
+glm::vec3 textureRgb(const scenes::Scene& scene, const scenes::TextureRef& ref, glm::vec2 uv0,
+                     bool nearest = false) {
   if (!ref.valid() || size_t(ref.texture) >= scene.textures.size()) return glm::vec3(1.0f);
   const scenes::Texture& texture = scene.textures[size_t(ref.texture)];
   if (!texture.loaded()) return glm::vec3(1.0f);
   // Texels carry only TEXCOORD_0; a texture asking for another set reads set 0 instead.
-  return glm::vec3(texture.sample(ref.transform(uv0)));
+  const glm::vec2 uv = ref.transform(uv0);
+  return glm::vec3(nearest ? texture.fetch(uv) : texture.sample(uv));
 }
 
-float textureAlpha(const scenes::Scene& scene, const scenes::TextureRef& ref, glm::vec2 uv0) {
+float textureAlpha(const scenes::Scene& scene, const scenes::TextureRef& ref, glm::vec2 uv0,
+                   bool nearest = false) {
   if (!ref.valid() || size_t(ref.texture) >= scene.textures.size()) return 1.0f;
   const scenes::Texture& texture = scene.textures[size_t(ref.texture)];
   if (!texture.loaded()) return 1.0f;
-  return texture.sample(ref.transform(uv0)).a;
+  const glm::vec2 uv = ref.transform(uv0);
+  return (nearest ? texture.fetch(uv) : texture.sample(uv)).a;
 }
 
 
@@ -81,16 +85,17 @@ glm::vec3 bounceAlbedo(const AlbedoInputs& in) {
   return diffuse + specColor * roughness * 0.5f;
 }
 
-glm::vec3 diffuseAlbedo(const scenes::Scene& scene, int material, glm::vec2 uv0) {
+glm::vec3 diffuseAlbedo(const scenes::Scene& scene, int material, glm::vec2 uv0, bool nearest) {
   const scenes::Material& m = scene.material(material);
-  const glm::vec3 mr = textureRgb(scene, m.metallicRoughnessTexture, uv0);
+  const glm::vec3 mr = textureRgb(scene, m.metallicRoughnessTexture, uv0, nearest);
   AlbedoInputs in;
-  in.baseColor = glm::vec3(m.baseColorFactor) * textureRgb(scene, m.baseColorTexture, uv0);
+  in.baseColor = glm::vec3(m.baseColorFactor) * textureRgb(scene, m.baseColorTexture, uv0, nearest);
   in.metallic = m.metallicFactor * mr.b;
   in.roughness = m.roughnessFactor * mr.g;
   in.ior = m.ior;
-  in.specular = m.specularFactor * textureAlpha(scene, m.specularTexture, uv0);
-  in.specularColor = m.specularColorFactor * textureRgb(scene, m.specularColorTexture, uv0);
+  in.specular = m.specularFactor * textureAlpha(scene, m.specularTexture, uv0, nearest);
+  in.specularColor =
+      m.specularColorFactor * textureRgb(scene, m.specularColorTexture, uv0, nearest);
   return bounceAlbedo(in);
 }
 
@@ -108,6 +113,11 @@ SurfaceBrdf surfaceBrdf(const scenes::Scene& scene, int material, glm::vec2 uv0)
   brdf.f0 = glm::mix(dielectric, base, metallic);
   brdf.roughness = glm::clamp(m.roughnessFactor * mr.g, 0.0f, 1.0f);
   return brdf;
+}
+
+bool albedoTextured(const scenes::Material& m) {
+  return m.baseColorTexture.valid() || m.metallicRoughnessTexture.valid() ||
+         m.specularTexture.valid() || m.specularColorTexture.valid();
 }
 
 glm::vec3 diffuseAlbedoFactor(const scenes::Material& m) {
@@ -181,10 +191,8 @@ namespace {
 // much (issue 16). Untextured materials, and triangles without both UV sets, read the sample.
 glm::vec3 footprintAlbedo(const scenes::Scene& scene, const TexelSet& texels, int material,
                           uint32_t t) {
-  const scenes::Material& m = scene.material(material);
-  const bool textured = m.baseColorTexture.valid() || m.metallicRoughnessTexture.valid() ||
-                        m.specularTexture.valid() || m.specularColorTexture.valid();
-  if (!textured) return diffuseAlbedo(scene, material, texels.uv0[t]);
+  if (!albedoTextured(scene.material(material)))
+    return diffuseAlbedo(scene, material, texels.uv0[t]);
   const scenes::Instance& inst = scene.instances[texels.instance[t]];
   const scenes::Primitive& prim =
       scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]];

@@ -139,13 +139,17 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     firstStart[t + 1] = firstStart[t] + firstCount[t];
   }
   std::vector<uint32_t> first(firstStart[count], TexelGather::kNoHit);
+  // The albedo at close hits on textured surfaces (TexelGather::hitAlbedo), as `first`.
+  const bool albedoDetail = options.albedoDetail > 0.0f;
+  auto albedoReach = [&](size_t t) { return options.albedoDetail * texels.edge[t]; };
+  std::vector<uint8_t> firstAlbedo(albedoDetail ? first.size() : 0, 0);
   std::vector<TexelRays> sums(count);
   // Texels found inside walls are collected apart and invalidated after the pass: hits read
   // texels.valid, so changing it during the pass would race and depend on thread timing.
   std::vector<uint8_t> buried(count, 0);
   // The lights each texel's sample sees, for the close hits' check (TexelOfHit::lightMatch).
   const LightVisibility lights(scene);
-  const std::vector<uint32_t> reached =
+  std::vector<uint32_t> reached =
       options.lightMatch ? lights.texels(tracer, texels) : std::vector<uint32_t>();
   TexelLookup lookup(texels);
   if (options.lightMatch) lookup.setLights(&lights, &reached);
@@ -206,6 +210,9 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
           continue;
         }
         std::copy_n(batch.codes().begin() + long(batchFirst[i]), n, first.begin() + long(firstStart[u]));
+        if (albedoDetail)
+          batch.albedoCodes(scene, tracer, batchFirst[i], n, albedoReach(u),
+                            &firstAlbedo[firstStart[u]]);
         accumulate(sums[u], sum, n);
       }
     }
@@ -277,6 +284,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     extraStart[t + 1] = extraStart[t] + extra;
   }
   std::vector<uint32_t> second(extraStart[count], TexelGather::kNoHit);
+  std::vector<uint8_t> secondAlbedo(albedoDetail ? second.size() : 0, 0);
   progress.begin("gather rays (near geometry)", count);
   parallelForBlocks(count, [&](size_t begin, size_t end, int) {
     GatherBatch batch;
@@ -310,6 +318,8 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         const uint32_t n = extraStart[u + 1] - extraStart[u];
         const GatherBatch::Summary sum = batch.summarize(tracer, at, at + n);
         std::copy_n(batch.codes().begin() + long(at), n, second.begin() + long(extraStart[u]));
+        if (albedoDetail)
+          batch.albedoCodes(scene, tracer, at, n, albedoReach(u), &secondAlbedo[extraStart[u]]);
         accumulate(sums[u], sum, n);
         at += n;
       }
@@ -385,10 +395,12 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     parallelForBlocks(count, [&](size_t begin, size_t end, int) {
       GatherBatch batch;
       std::vector<uint32_t> at;  // per queued ray, its index into `first`
+      std::vector<float> reach;  // ... and its texel's albedoReach
       std::vector<uint32_t> redo;
       for (size_t t = begin; t < end;) {
         batch.clear();
         at.clear();
+        reach.clear();
         for (; t < end && batch.size() < kRaysPerBatch; ++t) {
           if (!keepFirst[t]) continue;
           redo.clear();
@@ -402,11 +414,15 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
             ++next;
             batch.add(texels.position[t], frame, texels.geometricNormal[t], u);
             at.push_back(firstStart[t] + s);
+            reach.push_back(albedoReach(t));
           });
         }
         if (at.empty()) continue;
         batch.trace(tracer, texels, &settled);
-        for (size_t k = 0; k < at.size(); ++k) first[at[k]] = batch.codes()[k];
+        for (size_t k = 0; k < at.size(); ++k) {
+          first[at[k]] = batch.codes()[k];
+          if (albedoDetail) batch.albedoCodes(scene, tracer, k, 1, reach[k], &firstAlbedo[at[k]]);
+        }
       }
     }, kTexelsPerBlock);
 
@@ -422,6 +438,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     if (valid) g.fullRays[t] = uint16_t(kept + extra - (nearTexel[t] ? more : 0));
   }
   g.hits.resize(g.hitStart[count]);
+  g.hitAlbedo.assign(albedoDetail ? g.hits.size() : 0, 0);
   parallelFor(count, [&](size_t i) {
     const uint32_t t = uint32_t(i);
     if (g.hitStart[t + 1] == g.hitStart[t]) return;
@@ -429,11 +446,19 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     const uint32_t kept = keepFirst[t] ? firstCount[t] : 0;
     std::copy_n(first.begin() + long(firstStart[t]), kept, out);
     std::copy_n(second.begin() + long(extraStart[t]), extraStart[t + 1] - extraStart[t], out + kept);
+    if (albedoDetail) {
+      uint8_t* albedo = &g.hitAlbedo[g.hitStart[t]];
+      std::copy_n(firstAlbedo.begin() + long(firstStart[t]), kept, albedo);
+      std::copy_n(secondAlbedo.begin() + long(extraStart[t]), extraStart[t + 1] - extraStart[t],
+                  albedo + kept);
+    }
     if (nearTexel[t])
       for (uint32_t k = 0; k < g.hitStart[t + 1] - g.hitStart[t]; ++k) out[k] = farCode(t, out[k]);
   });
   std::vector<uint32_t>().swap(first);
   std::vector<uint32_t>().swap(second);
+  std::vector<uint8_t>().swap(firstAlbedo);
+  std::vector<uint8_t>().swap(secondAlbedo);
 
   // The backs some ray reached, and how far their own rays go (for their clusters).
   g.backSeen.assign(count, 0);
@@ -475,6 +500,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   }, kTexelsPerBlock);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
+  g.lightsReached = std::move(reached);
   return g;
 }
 

@@ -255,15 +255,15 @@ std::vector<uint8_t> markFilterNeighbours(const RayTracer& tracer, const TexelSe
   return marks;
 }
 
-// Gather points that share a far field (LinkOptions::sharedFarSpan): points of one texel in
-// one span × span square of an atlas, on one surface and in sight of each other. In rounds: in
+// Gather points that share a far field (LinkOptions::sharedFarSpan): points of one kind (of one
+// texel, or 2×2 blocks: a texel near other geometry sees a far field unlike its block
+// neighbours') in one span × span square of an atlas, on one surface and in sight of each
+// other. In rounds: in
 // every square the first point without a group anchors one, and the square's other points
 // without one join it when they share its surface and see it (the sight lines of a round
 // traced together); the rest try again next round. Per point its group, numbered in the order
 // of their anchors, or kNoTexel for a point alone in its group (its row keeps its far links:
-// sharing would only add one) and for points of several texels (a 2×2 block's rays are pooled
-// already, and its far field smoothed with its neighbours': sharing it over a wider square
-// measurably blurs corners). Deterministic: the rounds do not depend on threads.
+// sharing would only add one). Deterministic: the rounds do not depend on threads.
 struct FarGroups {
   std::vector<uint32_t> ofPoint;
   std::vector<uint32_t> start{0};  // group g's points: points[start[g] .. start[g+1])
@@ -279,10 +279,11 @@ FarGroups shareFarFields(const RayTracer& tracer, const TexelSet& texels,
   out.ofPoint.assign(points, kNoTexel);
   if (span <= 1) return out;
   auto firstTexel = [&](uint32_t p) { return gather.pointTexels[gather.pointStart[p]]; };
-  // (square, point) for the points of one texel, sorted: each square's points in a run.
+  auto lone = [&](uint32_t p) { return gather.pointStart[p + 1] - gather.pointStart[p] == 1; };
+  // (square, point) for every point (its first texel's square), sorted: each square's points
+  // in a run.
   std::vector<std::pair<uint64_t, uint32_t>> order;
   for (uint32_t p = 0; p < points; ++p) {
-    if (gather.pointStart[p + 1] - gather.pointStart[p] != 1) continue;
     const uint32_t t = firstTexel(p);
     const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
     const uint64_t columns = uint64_t(layout.width + span - 1) / uint64_t(span);
@@ -309,7 +310,9 @@ FarGroups shareFarFields(const RayTracer& tracer, const TexelSet& texels,
           open = true;
           continue;
         }
-        if (!sameSurface(texels, firstTexel(a), firstTexel(p)) || !alike(a, p)) continue;
+        if (lone(a) != lone(p) || !sameSurface(texels, firstTexel(a), firstTexel(p)) ||
+            !alike(a, p))
+          continue;
         if (!sightLine(texels, firstTexel(a), firstTexel(p), sights.emplace_back())) {
           sights.pop_back();
           anchor[p] = a;
@@ -511,6 +514,21 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   for (uint32_t c = 0; c < clusterCount; ++c)
     if (clusters.back[c] && clusters.firstTexel[c] < clusters.firstTexel[c + 1]) backClusters.push_back(c);
 
+  // A hit close by (within albedoDetail texel edges) on the front of a textured surface sees
+  // the texture there, not its cluster's mean: the link to its cluster carries the albedo at
+  // the hit point over the cluster's (TexelGather::hitAlbedo over clusterAlbedoTexture). On
+  // Sponza-sun walls a few cm from roof tiles and column mouldings whose texture differs 2x
+  // from their cluster's mean were 50% too bright or dark (issue 16). A ratio of texture
+  // modulations, as the transport's own, so a relight of the albedo factors leaves it be
+  // (untextured materials: no code, exactly 1).
+  const bool albedoRatios = gather.hitAlbedo.size() == gather.hits.size() && !gather.hits.empty();
+  auto albedoDetail = [&](uint32_t hitIndex, uint32_t code, uint32_t target) -> double {
+    if (!albedoRatios || gather.hitAlbedo[hitIndex] == 0) return 1.0;
+    if (target != clusters.texelCluster[code & TexelGather::kTexelMask]) return 1.0;
+    const glm::vec3 a = transport.clusterAlbedoTexture[target];
+    const double grey = (double(a.x) + double(a.y) + double(a.z)) / 3.0;
+    return grey > 0.0 ? double(TexelGather::albedoOfCode(gather.hitAlbedo[hitIndex])) / grey : 1.0;
+  };
   // A gather point's rays pooled, visit(target, weight, ray index, far hit) per hit. Hits in
   // the near field count over all the point's rays; hits beyond it were kept from the full
   // sets only, and share what the near hits and the misses leave (a ratio estimate), so every
@@ -542,7 +560,10 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
         const bool inNearField = !(code & TexelGather::kFar);
         if (!inNearField && i >= gather.fullRays[t]) continue;  // counted by the full rays
         const uint32_t c = targetOf(code, t);
-        if (c != kNoTexel) visit(c & ~kFarHit, inNearField ? nearWeight : farWeight, i, c >= kFarHit);
+        if (c == kNoTexel) continue;
+        const double w = (inNearField ? nearWeight : farWeight) *
+                         albedoDetail(firstHit + i, code, c & ~kFarHit);
+        visit(c & ~kFarHit, w, i, c >= kFarHit);
       }
     }
   };
@@ -566,7 +587,6 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     }
     farLight.assign(size_t(points) * channels, 0.0f);
     parallelFor(points, [&](size_t p) {
-      if (gather.pointStart[p + 1] - gather.pointStart[p] != 1) return;  // only these share
       std::vector<double> sum(channels, 0.0);
       double weight = 0.0;
       pointHits(uint32_t(p), [&](uint32_t c, double w, uint32_t, bool farHit) {
@@ -583,11 +603,17 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   // Two points may share a far field when their far hits receive alike light in every channel
   // (LinkOptions::sharedFarLightRatio).
   const float shareRatio = options.sharedFarLightRatio;
+  // A fifth of ClusterLight's floor (a hundredth of the channel's mean): a point whose far hits
+  // are all in shade must not take a far field with some sun in it. Between shaded far fields
+  // the difference is their bounced light, which this check cannot see, and on Sponza-sun at 8
+  // texels/m a point under a ledge took its neighbours' far field, 20 times its own.
+  constexpr float kSharedFloor = 0.2f;
   auto farLitAlike = [&](uint32_t a, uint32_t b) {
     if (farLight.empty()) return true;
     for (size_t ch = 0; ch < channels; ++ch) {
       const float x = farLight[a * channels + ch], y = farLight[b * channels + ch];
-      if (std::max(x, y) > shareRatio * std::min(x, y) + light.floors[ch]) return false;
+      if (std::max(x, y) > shareRatio * std::min(x, y) + kSharedFloor * light.floors[ch])
+        return false;
     }
     return true;
   };
@@ -613,21 +639,25 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
     if (shared > 0.0) row.add(sharedBase + group, shared);
   };
   // A shared far field: its points' hits on far clusters, as they weigh in their own rows
-  // (each point's rays count alike), thinned to about sharedFarPoints × texelRays rays: a
-  // point keeps the rays whose index modulo the stride is its rank in the group, so the
-  // group's points together keep each cell of the stratified hemisphere once (a point's full
-  // set walks the cells in order). Normalised where it is built.
+  // (each point's rays count alike), thinned to about sharedFarPoints × texelRays rays: the
+  // group's rays interleaved (ray i of the group's k-th point is ray i × m + k of the group)
+  // and an even share of them kept, so the points together still cover each cell of the
+  // stratified hemisphere (a point's full set walks the cells in order). A fraction, not every
+  // n-th: sharedFarPoints then sets the links' count smoothly. Normalised where it is built.
   const uint64_t sharedRays = uint64_t(std::max(1.0f, options.sharedFarPoints * float(rays)));
   auto sharedRow = [&](uint32_t g, RowBuilder& row) {
     const uint32_t first = groups.start[g], m = groups.start[g + 1] - first;
     uint64_t pooled = 0;
-    for (uint32_t k = first; k < first + m; ++k)
-      pooled += gather.fullRays[gather.pointTexels[gather.pointStart[groups.points[k]]]];
-    const uint32_t stride = uint32_t(std::clamp<uint64_t>(pooled / sharedRays, 1, m));
     for (uint32_t k = first; k < first + m; ++k) {
-      const uint32_t rank = (k - first) % stride;
+      const uint32_t p = groups.points[k];
+      for (uint32_t i = gather.pointStart[p]; i < gather.pointStart[p + 1]; ++i)
+        pooled += gather.fullRays[gather.pointTexels[i]];
+    }
+    const uint64_t keep = std::min(sharedRays, pooled);
+    for (uint32_t k = first; k < first + m; ++k) {
       pointHits(groups.points[k], [&](uint32_t c, double w, uint32_t ray, bool farHit) {
-        if (farHit && ray % stride == rank) row.add(c, w);
+        const uint64_t i = uint64_t(ray) * m + (k - first);
+        if (farHit && (i + 1) * keep / pooled > i * keep / pooled) row.add(c, w);
       });
     }
   };

@@ -39,6 +39,21 @@ glm::vec4 Texture::sample(glm::vec2 uv) const {
   return glm::mix(top, bottom, fy);
 }
 
+const glm::vec4* Texture::texelAt(glm::vec2 uv) const {
+  if (!loaded() || texels.size() < size_t(width) * size_t(height)) return nullptr;
+  auto index = [](float t, int n) {
+    if (!std::isfinite(t)) return 0;
+    const int i = int((t - std::floor(t)) * float(n));
+    return std::min(std::max(i, 0), n - 1);
+  };
+  return &texels[size_t(index(uv.y, height)) * size_t(width) + size_t(index(uv.x, width))];
+}
+
+glm::vec4 Texture::fetch(glm::vec2 uv) const {
+  const glm::vec4* texel = texelAt(uv);
+  return texel ? *texel : glm::vec4(1.0f);
+}
+
 size_t Mesh::triangleCount() const {
   size_t count = 0;
   for (const Primitive& p : primitives) count += p.triangleCount();

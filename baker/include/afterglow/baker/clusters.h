@@ -97,8 +97,11 @@ glm::vec3 bounceAlbedo(const AlbedoInputs& in);
 glm::vec3 dielectricF0(float ior, float specular, glm::vec3 specularColor);
 
 // The diffuse albedo the baker uses for a material at a UV: bounceAlbedo of its factors and
-// textures, linear RGB.
-glm::vec3 diffuseAlbedo(const scenes::Scene& scene, int material, glm::vec2 uv0);
+// textures, linear RGB. `nearest`: the textures' nearest texels (Texture::fetch), not bilinear.
+glm::vec3 diffuseAlbedo(const scenes::Scene& scene, int material, glm::vec2 uv0,
+                        bool nearest = false);
+// Whether a texture enters a material's diffuse albedo (else it is the same everywhere).
+bool albedoTextured(const scenes::Material& material);
 // bounceAlbedo of a material's factors alone (every texture read as 1): the transport's
 // material albedo, which the per-cluster texture ratios multiply.
 glm::vec3 diffuseAlbedoFactor(const scenes::Material& material);

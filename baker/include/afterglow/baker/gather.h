@@ -2,6 +2,8 @@
 // the clustering and the form factors.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -24,6 +26,16 @@ struct TexelGather {
   // and carry kFar when they went beyond it, to be left out.
   std::vector<uint32_t> hitStart;
   std::vector<uint32_t> hits;
+  // Per hit (as `hits`; empty when LinkOptions::albedoDetail is off): for hits on the front of
+  // a textured material nearer than albedoDetail texel edges, the texture's grey modulation of
+  // the albedo at the hit point (albedoCode: log-coded in steps of 3%, 1/512 to 2.5); 0 for
+  // the others.
+  std::vector<uint8_t> hitAlbedo;
+  static uint8_t albedoCode(float grey) {
+    if (!(grey > 0.0f)) return 1;
+    return uint8_t(std::clamp(std::lround(223.0 + 24.0 * std::log2(double(grey))), 1l, 255l));
+  }
+  static float albedoOfCode(uint8_t code) { return std::exp2((float(code) - 223.0f) / 24.0f); }
   std::vector<uint16_t> fullRays;
   // Sky SH transfer, texel-major, kShCount per texel: over the texel's gather point's rays (a
   // texel of a 2×2 block casts a quarter of them).
@@ -35,6 +47,10 @@ struct TexelGather {
   // harmonic distance seen from behind (an eighth of the rays) drives that clustering.
   std::vector<uint8_t> backSeen;
   std::vector<float> backHarmonicDistance;
+  // Per texel, the lights its sample sees (LightVisibility): how the gather's hits were
+  // light-matched (TexelOfHit::lightMatch), kept for refineGather's rays. Empty without the
+  // check.
+  std::vector<uint32_t> lightsReached;
 
   // Gather points (runtime::TransportData): blocks of up to 2×2 texels on one surface whose
   // rays are pooled into one row of links, each casting a share of raysPerTexel; texels near

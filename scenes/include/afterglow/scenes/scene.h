@@ -41,6 +41,11 @@ struct Texture {
   bool loaded() const { return width > 0 && height > 0; }
   // Bilinear lookup with repeat wrapping; returns (1,1,1,1) when not loaded.
   glm::vec4 sample(glm::vec2 uv) const;
+  // The nearest texel, with repeat wrapping: one read where sample makes four, for estimates
+  // that average many point samples anyway (the gather's hits).
+  glm::vec4 fetch(glm::vec2 uv) const;
+  // The texel fetch reads (for prefetching), or null when not loaded.
+  const glm::vec4* texelAt(glm::vec2 uv) const;
 };
 
 enum class AlphaMode { Opaque, Mask, Blend };
