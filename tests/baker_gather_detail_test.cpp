@@ -1,8 +1,10 @@
-// Two refinements of the gather's rays (issue 16), each against the reference path tracer:
+// Two refinements of the gather's rays (issue 16):
 // - more rays where the first ones leave a gather point's light uncertain (refineGather): a
-//   shaded ceiling that sees the sun on the floor only through a slit;
+//   shaded roof that sees the sun on the floor only through a slit, against the same bake
+//   with 32 times the rays (the noise it removes);
 // - close hits on a textured surface take the texture at the hit point, not their cluster's
-//   mean (LinkOptions::albedoDetail): a wall standing on a striped floor.
+//   mean (LinkOptions::albedoDetail): a wall standing on a striped floor, against the
+//   reference path tracer.
 #include <gtest/gtest.h>
 
 #include <cmath>
