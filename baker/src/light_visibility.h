@@ -43,6 +43,11 @@ class LightVisibility {
       if (lights_.size() < 31) lights_.push_back(l);
   }
   bool empty() const { return lights_.empty(); }
+  size_t size() const { return lights_.size(); }
+  // Light i's shadow ray from p (as at() traces it), or false when it cannot reach p.
+  bool shadowRayOf(size_t i, glm::vec3 p, glm::vec3 normal, Ray& ray) const {
+    return shadowRay(lights_[i], p, normal, ray);
+  }
 
   // Bit i set when light i reaches p, a point lifted off a surface whose side facing the
   // arriving light is `normal` (unit).
