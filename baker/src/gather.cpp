@@ -331,11 +331,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   // Which hits of a near texel lie beyond its near field (nearField texel edges): measured to
   // the sample of the texel hit, which sits within that texel of the hit point.
   auto farCode = [&](uint32_t from, uint32_t code) {
-    if (code == TexelGather::kNoHit) return code;
-    const uint32_t hit = code & TexelGather::kTexelMask;
-    const float reach = options.nearField * texels.edge[from];
-    const glm::vec3 d = texels.position[hit] - texels.position[from];
-    return glm::dot(d, d) > reach * reach ? (code | TexelGather::kFar) : code;
+    return nearFieldCode(texels, options.nearField, from, code);
   };
 
   // Gather points: the blocks without the texels that left them, numbered in the blocks'

@@ -118,6 +118,18 @@ class TexelLookup {
   const std::vector<uint32_t>* reached_ = nullptr;
 };
 
+// A near texel's hit code (TexelGather), flagged kFar when the texel hit lies beyond `from`'s
+// near field (nearField texel edges): measured to the sample of the texel hit, which sits
+// within that texel of the hit point.
+inline uint32_t nearFieldCode(const TexelSet& texels, float nearField, uint32_t from,
+                              uint32_t code) {
+  if (code == TexelGather::kNoHit) return code;
+  const uint32_t hit = code & TexelGather::kTexelMask;
+  const float reach = nearField * texels.edge[from];
+  const glm::vec3 d = texels.position[hit] - texels.position[from];
+  return glm::dot(d, d) > reach * reach ? (code | TexelGather::kFar) : code;
+}
+
 // The texel whose light a ray hit receives: t, the texel under the hit point, unless a
 // wall or object cuts through that texel's footprint and stands between the hit point and the
 // texel's sample, as for a floor texel half under a box: a ray from inside the box that lands
@@ -130,19 +142,27 @@ class TexelLookup {
 // off it (texel t's offset, millimetres or more) dwarfs, and without the triangle's vertices
 // to fetch.
 struct TexelOfHit {
+  // The hit point lifted off its surface by texel t's offset, on the side the ray arrived at:
+  // where sight lines and the light check start.
+  static glm::vec3 lightOrigin(const TexelSet& texels, uint32_t t, const Hit& hit,
+                               glm::vec3 hitPoint) {
+    const glm::vec3 side = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
+    return hitPoint + side * texels.offset[t];
+  }
+
   // The line from the hit point (lifted off the surface by texel t's offset) to the sample of
   // texel `target` on the side the ray arrived at; false when the two coincide (nothing can
   // stand between them).
   static bool sightLine(const TexelSet& texels, uint32_t t, const Hit& hit, glm::vec3 hitPoint,
                         uint32_t target, Ray& ray) {
-    return segment(from(texels, t, hit, hitPoint),
+    return segment(lightOrigin(texels, t, hit, hitPoint),
                    hit.frontFace ? texels.position[target] : texels.backPosition(target), ray);
   }
 
   // The nearest valid neighbour of t in its chart that the hit point sees, or kNoTexel.
   static uint32_t standIn(const RayTracer& tracer, const TexelSet& texels, uint32_t t,
                           const Hit& hit, glm::vec3 hitPoint) {
-    const glm::vec3 origin = from(texels, t, hit, hitPoint);
+    const glm::vec3 origin = lightOrigin(texels, t, hit, hitPoint);
     auto sees = [&](uint32_t candidate) {
       Ray ray;
       return !sightLine(texels, t, hit, hitPoint, candidate, ray) || !tracer.occluded(ray);
@@ -180,7 +200,7 @@ struct TexelOfHit {
                              const TexelLookup& lookup, uint32_t t, const Hit& hit,
                              glm::vec3 hitPoint, uint32_t want) {
     constexpr uint32_t kUneven = LightVisibility::kUneven;
-    const glm::vec3 origin = from(texels, t, hit, hitPoint);
+    const glm::vec3 origin = lightOrigin(texels, t, hit, hitPoint);
     const std::vector<uint32_t>& reached = lookup.reached();
     if (want == reached[t]) return t;  // lit alike, evenly
     const uint32_t own = reached[t] & ~kUneven;
@@ -222,17 +242,6 @@ struct TexelOfHit {
       }
   }
 
-  static glm::vec3 from(const TexelSet& texels, uint32_t t, const Hit& hit, glm::vec3 hitPoint) {
-    return lightOrigin(texels, t, hit, hitPoint);
-  }
-
- public:
-  // The hit point lifted off its surface by texel t's offset, on the side the ray arrived at.
-  static glm::vec3 lightOrigin(const TexelSet& texels, uint32_t t, const Hit& hit,
-                               glm::vec3 hitPoint) {
-    const glm::vec3 side = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
-    return hitPoint + side * texels.offset[t];
-  }
 };
 
 // Cosine-distributed rays of one or several texels (or a cluster), traced together: the bigger

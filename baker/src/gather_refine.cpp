@@ -64,12 +64,6 @@ Status refineGather(const scenes::Scene& scene, const RayTracer& tracer, const T
   }
   if (channels.empty()) return Status::ok();
 
-  auto clusterOf = [&](uint32_t code) -> uint32_t {
-    if (code == TexelGather::kNoHit) return kNoTexel;
-    const uint32_t t = code & TexelGather::kTexelMask;
-    return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t]
-                                            : clusters.texelCluster[t];
-  };
   // Whether ray i of texel t counts for its point (near rays beyond their near field do not).
   auto counts = [&](uint32_t t, uint32_t i, uint32_t code) {
     return i < gather.fullRays[t] || code == TexelGather::kNoHit || !(code & TexelGather::kFar);
@@ -98,7 +92,7 @@ Status refineGather(const scenes::Scene& scene, const RayTracer& tracer, const T
         for (uint32_t i = gather.hitStart[t]; i < gather.hitStart[t + 1]; ++i) {
           const uint32_t code = gather.hits[i];
           if (!counts(t, i - gather.hitStart[t], code)) continue;
-          const uint32_t c = clusterOf(code);
+          const uint32_t c = clusters.ofHit(code);
           if (c == kNoTexel) continue;
           const double v = double((*ch.cluster)[c]);
           sum += v, squares += v * v;
@@ -176,14 +170,8 @@ Status refineGather(const scenes::Scene& scene, const RayTracer& tracer, const T
     std::copy_n(gather.hits.begin() + long(old), full, out);
     const bool near = n > full;
     for (uint32_t k = 0; k < extra[t]; ++k) {
-      uint32_t code = codes[extraStart[t] + k];
-      if (near && code != TexelGather::kNoHit) {
-        const uint32_t hit = code & TexelGather::kTexelMask;
-        const float reach = options.nearField * texels.edge[t];
-        const glm::vec3 d = texels.position[hit] - texels.position[t];
-        if (glm::dot(d, d) > reach * reach) code |= TexelGather::kFar;
-      }
-      out[full + k] = code;
+      const uint32_t code = codes[extraStart[t] + k];
+      out[full + k] = near ? nearFieldCode(texels, options.nearField, t, code) : code;
     }
     std::copy_n(gather.hits.begin() + long(old + full), n - full, out + full + extra[t]);
     if (albedoDetail) {

@@ -44,20 +44,10 @@ class LightVisibility {
   }
   bool empty() const { return lights_.empty(); }
   size_t size() const { return lights_.size(); }
-  // Light i's shadow ray from p (as at() traces it), or false when it cannot reach p.
+  // Light i's hard shadow ray from p, a point lifted off a surface whose side facing the
+  // arriving light is `normal` (unit), or false when light i cannot reach p.
   bool shadowRayOf(size_t i, glm::vec3 p, glm::vec3 normal, Ray& ray) const {
     return shadowRay(lights_[i], p, normal, ray);
-  }
-
-  // Bit i set when light i reaches p, a point lifted off a surface whose side facing the
-  // arriving light is `normal` (unit).
-  uint32_t at(const RayTracer& tracer, glm::vec3 p, glm::vec3 normal) const {
-    uint32_t bits = 0;
-    for (size_t i = 0; i < lights_.size(); ++i) {
-      Ray ray;
-      if (shadowRay(lights_[i], p, normal, ray) && !tracer.occluded(ray)) bits |= 1u << i;
-    }
-    return bits;
   }
 
   // Every texel's, at its sample on its front side (0 for every texel without lights), with

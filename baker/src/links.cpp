@@ -458,11 +458,7 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   fillMaterials(scene, clusters, transport);
 
   // The cluster a hit code lands in: the texel's front cluster, or its back-side cluster.
-  auto clusterOf = [&](uint32_t code) -> uint32_t {
-    if (code == TexelGather::kNoHit) return kNoTexel;
-    const uint32_t t = code & TexelGather::kTexelMask;
-    return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
-  };
+  auto clusterOf = [&](uint32_t code) { return clusters.ofHit(code); };
   // The front clusters' sky transfer, the area-weighted mean of their texels' (the back
   // clusters' comes with their rays below); before the far targets, whose light check reads it.
   auto memberArea = [&](size_t c) {
@@ -522,12 +518,15 @@ Status computeLinks(const scenes::Scene& scene, const RayTracer& tracer, const T
   // modulations, as the transport's own, so a relight of the albedo factors leaves it be
   // (untextured materials: no code, exactly 1).
   const bool albedoRatios = gather.hitAlbedo.size() == gather.hits.size() && !gather.hits.empty();
+  std::vector<float> clusterGrey;  // per cluster, its texture's grey modulation
+  if (albedoRatios)
+    for (const glm::vec3& a : transport.clusterAlbedoTexture)
+      clusterGrey.push_back((a.x + a.y + a.z) / 3.0f);
   auto albedoDetail = [&](uint32_t hitIndex, uint32_t code, uint32_t target) -> double {
     if (!albedoRatios || gather.hitAlbedo[hitIndex] == 0) return 1.0;
     if (target != clusters.texelCluster[code & TexelGather::kTexelMask]) return 1.0;
-    const glm::vec3 a = transport.clusterAlbedoTexture[target];
-    const double grey = (double(a.x) + double(a.y) + double(a.z)) / 3.0;
-    return grey > 0.0 ? double(TexelGather::albedoOfCode(gather.hitAlbedo[hitIndex])) / grey : 1.0;
+    const float grey = clusterGrey[target];
+    return grey > 0.0f ? double(TexelGather::albedoOfCode(gather.hitAlbedo[hitIndex]) / grey) : 1.0;
   };
   // A gather point's rays pooled, visit(target, weight, ray index, far hit) per hit. Hits in
   // the near field count over all the point's rays; hits beyond it were kept from the full

@@ -65,6 +65,13 @@ struct Clusters {
   std::vector<uint32_t> memberTexels;  //   firstTexel[c+1])
 
   uint32_t size() const { return uint32_t(area.size()); }
+  // The cluster a gather hit code (TexelGather) lands in: its texel's front cluster, or its
+  // back-side cluster; kNoTexel for a miss.
+  uint32_t ofHit(uint32_t code) const {
+    if (code == TexelGather::kNoHit) return runtime::kNoTexel;
+    const uint32_t t = code & TexelGather::kTexelMask;
+    return (code & TexelGather::kBackSide) ? texelBackCluster[t] : texelCluster[t];
+  }
 };
 
 // Groups the valid texels into clusters: front sides first, then the back sides of
