@@ -203,6 +203,10 @@ void printIndirectBreakdown(const scenes::Scene& scene, const baker::RayTracer& 
   const double sunny = sorted.empty() ? 0.0 : 0.1 * sorted[sorted.size() * 9 / 10];
 
   std::map<std::string, ClassSum> classes;
+  // How many texels share each gather point (1: the texel gathers alone).
+  std::vector<uint32_t> pointTexels(b.transport.gatherPointCount + 1, 0);
+  for (uint32_t p : b.transport.texelPoint)
+    ++pointTexels[p == runtime::kNoTexel ? b.transport.gatherPointCount : p];
   ClassSum all, capped;  // capped: each texel's e² at most 1, so a few texels 5-20× off (the
                         //   relative RMSE's outliers) weigh no more than any texel 100% off
   // The bake's own error rank, to show how concentrated the error is.
@@ -252,6 +256,8 @@ void printIndirectBreakdown(const scenes::Scene& scene, const baker::RayTracer& 
     add(classes[u < 0.1 ? "hit clusters' direct uneven <10%"
                 : u < 0.3 ? "hit clusters' direct uneven 10-30%" : "hit clusters' direct uneven >=30%"]);
     add(classes[texels.nearGeometry[t] ? "nearGeometry 1" : "nearGeometry 0"]);
+    add(classes[pointTexels[b.transport.texelPoint[t]] == 1 ? "gather point: alone"
+                                                            : "gather point: block"]);
     add(classes[e2s[i] > top1 ? "rank: worst 1%" : e2s[i] > top10 ? "rank: worst 1-10%" : "rank: rest"]);
     const int material = baker::texelMaterial(scene, texels, t);
     add(classes["material " + (material >= 0 ? scene.materials[size_t(material)].name : "-")]);

@@ -7,6 +7,7 @@
 //       [--cluster-size M] [--cluster-texels N] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
 //       [--far-levels N] [--far-scale X] [--far-distance X] [--shared-far-span N] [--shared-far-points X]
 //       [--filter-passes N] [--filter-reach X] [--filter-angle DEG] [--filter-light-ratio R]
+//       [--filter-noise-sigmas S]
 //       [--far-light-ratio R] [--shared-far-light-ratio R] [--no-light-match] [--min-weight W]
 //       [--light-samples N] [--emissive-samples N]
 //       [--penumbra-samples N] [--worst N [--direct]] [--repeat N] [--single-sided-emission]
@@ -115,6 +116,7 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--filter-reach") options.links.filterReach = float(next());
     else if (arg == "--filter-angle") options.links.filterMaxAngleDeg = float(next());
     else if (arg == "--filter-light-ratio") options.links.filterLightRatio = float(next());
+    else if (arg == "--filter-noise-sigmas") options.links.filterNoiseSigmas = float(next());
     else if (arg == "--far-light-ratio") options.links.farLightRatio = float(next());
     else if (arg == "--shared-far-light-ratio") options.links.sharedFarLightRatio = float(next());
     else if (arg == "--refine-error") options.links.refineError = float(next());

@@ -101,7 +101,8 @@ Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
                     tr, progress, far);
   if (cancelled()) return Status::error("cancelled");
   if (!st) return st;
-  cutSmoothingAcrossLight(result.texels, options.links.filterLightRatio, tr);
+  cutSmoothingAcrossLight(result.texels, options.links.filterLightRatio,
+                          options.links.filterNoiseSigmas, gather->pointRays(), tr);
   record("links", t0);
   gather = TexelGather();  // the hit codes are the bake's largest buffer
 

@@ -1,6 +1,7 @@
 #include "filter_light_edges.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -23,10 +24,25 @@ double rowSum(const SparseLinks& links, size_t r, const std::vector<float>& valu
   return sum;
 }
 
+// Row r of `links` applied to the squares of `values`.
+double rowSquares(const SparseLinks& links, size_t r, const std::vector<float>& values) {
+  double sum = 0.0;
+  for (size_t k = links.rowStart[r]; k < links.rowStart[r + 1]; ++k) {
+    const double v = double(values[links.targetAt(k)]);
+    sum += double(links.weightAt(r, k)) * v * v;
+  }
+  return sum;
+}
+
 // Every gather point's first bounce of one source, per unit source and unit albedo: the
 // clusters' received light `received` (per cluster) carried through the far clusters, the
 // shared far fields and the links, as the solver's first pass carries reflected light.
-std::vector<float> firstBounce(const TransportData& d, std::vector<float> received) {
+// With `rays` (per gather point, the rays behind its row), also the variance of that estimate
+// in `variance`: the spread of what single rays bring (the row's weights are the rays' shares;
+// the misses bring nothing) over the rays. A far cluster or a shared far field counts as one
+// value, so the spread of far light is understated: where in doubt, the edge stays.
+std::vector<float> firstBounce(const TransportData& d, std::vector<float> received,
+                               const std::vector<uint32_t>& rays, std::vector<float>& variance) {
   const size_t clusters = d.clusterCount, far = d.farClusters.rows();
   received.resize(d.linkTargetCount(), 0.0f);
   parallelFor(far, [&](size_t f) {
@@ -40,15 +56,22 @@ std::vector<float> firstBounce(const TransportData& d, std::vector<float> receiv
     received[base + s] = float(rowSum(d.sharedFar, s, received));
   }, 1024);
   std::vector<float> gathered(d.gatherPointCount, 0.0f);
+  const bool withVariance = rays.size() == d.gatherPointCount;
+  variance.assign(withVariance ? d.gatherPointCount : 0, 0.0f);
   parallelFor(d.gatherPointCount, [&](size_t p) {
-    gathered[p] = float(rowSum(d.links, p, received));
+    const double mean = rowSum(d.links, p, received);
+    gathered[p] = float(mean);
+    if (withVariance && rays[p] > 1)
+      variance[p] = float(std::max(0.0, rowSquares(d.links, p, received) - mean * mean) /
+                          double(rays[p] - 1));
   }, 1024);
   return gathered;
 }
 
 }  // namespace
 
-void cutSmoothingAcrossLight(const TexelSet& texels, float maxRatio, TransportData& d) {
+void cutSmoothingAcrossLight(const TexelSet& texels, float maxRatio, float noiseSigmas,
+                             const std::vector<uint32_t>& pointRays, TransportData& d) {
   if (!(maxRatio > 1.0f) || d.texelNeighbours.size() != texels.size()) return;
   const ClusterLight light = clusterLight(d, maxRatio);
   const size_t count = texels.size();
@@ -62,7 +85,9 @@ void cutSmoothingAcrossLight(const TexelSet& texels, float maxRatio, TransportDa
   auto alone = [&](size_t t) { return texelsOfPoint[d.texelPoint[t]] == 1; };
   std::vector<uint8_t> cut(count, 0);
   for (const std::vector<float>& received : light.channels) {
-    const std::vector<float> v = firstBounce(d, received);
+    std::vector<float> var;
+    const std::vector<float> v =
+        firstBounce(d, received, noiseSigmas > 0.0f ? pointRays : std::vector<uint32_t>(), var);
     // Differences below a fifth of the mean first bounce do not count: dim texels' own noise.
     double mean = 0.0;
     for (float x : v) mean += double(x);
@@ -79,8 +104,15 @@ void cutSmoothingAcrossLight(const TexelSet& texels, float maxRatio, TransportDa
         const uint32_t n = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
         if (n == kNoTexel || d.texelPoint[n] == kNoTexel || (!alone(t) && !alone(n))) continue;
         const float other = v[d.texelPoint[n]];
-        if (std::max(own, other) > maxRatio * std::min(own, other) + floor)
-          cut[t] |= uint8_t(1u << k);
+        if (!(std::max(own, other) > maxRatio * std::min(own, other) + floor)) continue;
+        // A difference their rays cannot tell from noise is no edge: the smoothing is what
+        // evens it out.
+        if (!var.empty() &&
+            double(std::abs(own - other)) <
+                double(noiseSigmas) *
+                    std::sqrt(double(var[d.texelPoint[t]]) + double(var[d.texelPoint[n]])))
+          continue;
+        cut[t] |= uint8_t(1u << k);
       }
     }, 4096);
   }

@@ -14,15 +14,25 @@
 // albedos or the sky change: relight still equals rebake.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "afterglow/baker/texels.h"
 #include "afterglow/runtime/transport.h"
 
 namespace afterglow::baker {
 
+// ... unless the two first bounces differ by less than noiseSigmas standard deviations of their
+// difference, as the points' own rays measure it (LinkOptions::filterNoiseSigmas): a dark
+// texel whose few rays found a sunlit patch two times where its neighbours found it none is
+// noise for the smoothing to even out, not a light edge to keep.
+//
 // Clears the marks of transport.texelNeighbours between texels whose gather points differ
-// like that, and rebuilds the gather maps from them. Needs the links, far clusters, shared far
-// fields, sky transfer and the sources' cluster transfer. maxRatio <= 1: nothing changes.
-void cutSmoothingAcrossLight(const TexelSet& texels, float maxRatio,
+// like that, and rebuilds the gather maps from them. `pointRays`: per gather point, the rays
+// behind its row. Needs the links, far clusters, shared far fields, sky transfer and the
+// sources' cluster transfer. maxRatio <= 1: nothing changes; noiseSigmas <= 0: no noise test.
+void cutSmoothingAcrossLight(const TexelSet& texels, float maxRatio, float noiseSigmas,
+                             const std::vector<uint32_t>& pointRays,
                              runtime::TransportData& transport);
 
 }  // namespace afterglow::baker

@@ -59,6 +59,14 @@ struct TexelGather {
   std::vector<uint32_t> pointStart;    // texels of point p: pointTexels[pointStart[p] ..
   std::vector<uint32_t> pointTexels;   //   pointStart[p+1])
   uint32_t points() const { return pointStart.empty() ? 0 : uint32_t(pointStart.size() - 1); }
+  // Per gather point, the rays its texels cast (every one, the refined gather's included).
+  std::vector<uint32_t> pointRays() const {
+    std::vector<uint32_t> rays(points(), 0);
+    for (uint32_t p = 0; p < points(); ++p)
+      for (uint32_t k = pointStart[p]; k < pointStart[p + 1]; ++k)
+        rays[p] += hitStart[pointTexels[k] + 1] - hitStart[pointTexels[k]];
+    return rays;
+  }
 };
 
 }  // namespace afterglow::baker
