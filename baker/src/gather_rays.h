@@ -2,6 +2,7 @@
 // back-side clusters' rays (links.cpp), so both classify hits the same way.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -137,7 +138,8 @@ inline uint32_t nearFieldCode(const TexelSet& texels, float nearField, uint32_t 
 // of the same chart that the hit point does see stands in; with none, the ray is absorbed.
 // Only texels near other geometry (TexelLookup::kNear) are checked. In two steps, so that a
 // batch's sight lines are traced together: sightLine() gives the line from the hit point to
-// its texel's sample, and standIn() searches the neighbours when that line is blocked. The hit
+// its texel's sample, and when that line is blocked standInCandidates() are searched, a
+// batch's searches together (SightSearch). The hit
 // point is the ray's origin + t × direction: within micrometres of the surface, which the lift
 // off it (texel t's offset, millimetres or more) dwarfs, and without the triangle's vertices
 // to fetch.
@@ -159,24 +161,15 @@ struct TexelOfHit {
                    hit.frontFace ? texels.position[target] : texels.backPosition(target), ray);
   }
 
-  // The nearest valid neighbour of t in its chart that the hit point sees, or kNoTexel.
-  static uint32_t standIn(const RayTracer& tracer, const TexelSet& texels, uint32_t t,
-                          const Hit& hit, glm::vec3 hitPoint) {
+  // The stand-in search's candidates, visit(n, distance, kind): every valid neighbour of t in
+  // its chart (kind 0), of which the nearest the hit point sees stands in (kNoTexel: none).
+  template <class Visit>
+  static void standInCandidates(const TexelSet& texels, uint32_t t, const Hit& hit,
+                                glm::vec3 hitPoint, Visit&& visit) {
     const glm::vec3 origin = lightOrigin(texels, t, hit, hitPoint);
-    auto sees = [&](uint32_t candidate) {
-      Ray ray;
-      return !sightLine(texels, t, hit, hitPoint, candidate, ray) || !tracer.occluded(ray);
-    };
-    uint32_t best = runtime::kNoTexel;
-    float bestDistance = std::numeric_limits<float>::infinity();
     forChartNeighbours(texels, t, 1, [&](uint32_t n) {
-      const float distance = glm::length(texels.position[n] - origin);
-      if (distance < bestDistance && sees(n)) {
-        bestDistance = distance;
-        best = n;
-      }
+      visit(n, glm::length(texels.position[n] - origin), 0);
     });
-    return best;
   }
 
   // A hit nearer its ray's origin than this many of its texel's edges is checked for light
@@ -194,33 +187,31 @@ struct TexelOfHit {
   // t when its sample is lit like the hit point; kNoTexel (absorbed) when a light reaches t's
   // sample but not the hit point, for a sunlit sample must not light a shadowed contact, whose
   // own light is the little that bounced into it; else t.
-  // `want`: the lights that reach the hit point lifted off its surface (LightVisibility::at
-  // at lightOrigin).
-  static uint32_t lightMatch(const RayTracer& tracer, const TexelSet& texels,
-                             const TexelLookup& lookup, uint32_t t, const Hit& hit,
-                             glm::vec3 hitPoint, uint32_t want) {
+  // `want`: the lights that reach the hit point lifted off its surface. In two steps, so that
+  // a batch's searches trace their sight lines together: whether a search is needed
+  // (needsLightMatch), its candidates (lightMatchCandidates: kind 0 lit evenly, 1 unevenly),
+  // and the choice once the nearest of each kind in sight is known (lightMatchChoice).
+  static bool needsLightMatch(const TexelLookup& lookup, uint32_t t, uint32_t want) {
+    return want != lookup.reached()[t];  // else lit alike, evenly: t
+  }
+  template <class Visit>
+  static void lightMatchCandidates(const TexelSet& texels, const TexelLookup& lookup, uint32_t t,
+                                   const Hit& hit, glm::vec3 hitPoint, uint32_t want,
+                                   Visit&& visit) {
     constexpr uint32_t kUneven = LightVisibility::kUneven;
     const glm::vec3 origin = lightOrigin(texels, t, hit, hitPoint);
     const std::vector<uint32_t>& reached = lookup.reached();
-    if (want == reached[t]) return t;  // lit alike, evenly
-    const uint32_t own = reached[t] & ~kUneven;
-    // The nearest in sight lit like the hit point: [0] evenly, [1] unevenly.
-    uint32_t best[2] = {runtime::kNoTexel, runtime::kNoTexel};
-    float bestDistance[2] = {std::numeric_limits<float>::infinity(),
-                             std::numeric_limits<float>::infinity()};
     forChartNeighbours(texels, t, 2, [&](uint32_t n) {
       if ((reached[n] & ~kUneven) != want) return;
-      const int k = (reached[n] & kUneven) ? 1 : 0;
-      const float distance = glm::length(texels.position[n] - origin);
-      if (distance >= bestDistance[k]) return;
-      Ray line;
-      if (sightLine(texels, t, hit, hitPoint, n, line) && tracer.occluded(line)) return;
-      bestDistance[k] = distance;
-      best[k] = n;
+      visit(n, glm::length(texels.position[n] - origin), (reached[n] & kUneven) ? 1 : 0);
     });
-    if (best[0] != runtime::kNoTexel) return best[0];
+  }
+  static uint32_t lightMatchChoice(const TexelLookup& lookup, uint32_t t, uint32_t want,
+                                   uint32_t nearestEven, uint32_t nearestUneven) {
+    const uint32_t own = lookup.reached()[t] & ~LightVisibility::kUneven;
+    if (nearestEven != runtime::kNoTexel) return nearestEven;
     if (want == own) return t;
-    if (best[1] != runtime::kNoTexel) return best[1];
+    if (nearestUneven != runtime::kNoTexel) return nearestUneven;
     return (own & ~want) ? runtime::kNoTexel : t;
   }
 
@@ -242,6 +233,105 @@ struct TexelOfHit {
       }
   }
 
+};
+
+// Searches for the nearest candidate texel of each kind whose sample a hit point sees, many
+// searches at once (TexelOfHit's stand-in and light match): each search's candidates sorted by
+// distance, then rounds that trace the next candidate of every search still open as one ray
+// stream. The same texels as testing candidates one by one in visit order (ties go to the
+// first visited), and no more sight lines: a candidate is only tested while nothing nearer of
+// its kind has been seen.
+class SightSearch {
+ public:
+  static constexpr int kKinds = 2;
+  void clear() {
+    candidates_.clear();
+    searches_.clear();
+  }
+  // Opens a search from hit `ray` of the batch, on behalf of texel `texel`; returns its index.
+  uint32_t open(uint32_t ray, uint32_t texel) {
+    const uint32_t at = uint32_t(candidates_.size());
+    searches_.push_back({ray, texel, at, at, {}, {}});
+    return uint32_t(searches_.size() - 1);
+  }
+  // Adds a candidate to the last search opened.
+  void add(uint32_t texel, float distance, int kind) {
+    candidates_.push_back({distance, uint32_t(candidates_.size()), texel, uint8_t(kind)});
+    searches_.back().end = uint32_t(candidates_.size());
+  }
+  // Runs every search. line(search's ray, search's texel, candidate, Ray&) gives the sight
+  // line, false when none is needed (the hit point is at the candidate's sample).
+  template <class Line>
+  void run(const RayTracer& tracer, Line&& line) {
+    for (Search& s : searches_) {
+      std::sort(candidates_.begin() + s.begin, candidates_.begin() + s.end,
+                [](const Candidate& a, const Candidate& b) {
+                  return a.distance < b.distance || (a.distance == b.distance && a.order < b.order);
+                });
+      for (int k = 0; k < kKinds; ++k) s.next[k] = s.begin, s.found[k] = runtime::kNoTexel;
+    }
+    for (;;) {
+      rays_.clear();
+      tested_.clear();
+      for (uint32_t i = 0; i < searches_.size(); ++i) {
+        Search& s = searches_[i];
+        for (int k = 0; k < kKinds; ++k) {
+          // The kind's next candidate; those that need no line are seen at once.
+          while (s.found[k] == runtime::kNoTexel && s.next[k] < s.end) {
+            const Candidate& c = candidates_[s.next[k]];
+            if (c.kind != k) {
+              ++s.next[k];
+              continue;
+            }
+            Ray ray;
+            if (!line(s.ray, s.texel, c.texel, ray)) {
+              s.found[k] = c.texel;
+              break;
+            }
+            rays_.push_back(ray);
+            tested_.push_back({i, k});
+            break;
+          }
+        }
+      }
+      if (rays_.empty()) return;
+      if (blockedSize_ < rays_.size()) {
+        blockedSize_ = rays_.size();
+        blocked_.reset(new bool[blockedSize_]);
+      }
+      tracer.occluded(rays_.data(), blocked_.get(), rays_.size());
+      for (size_t j = 0; j < rays_.size(); ++j) {
+        Search& s = searches_[tested_[j].first];
+        const int k = tested_[j].second;
+        if (blocked_[j]) ++s.next[k];
+        else s.found[k] = candidates_[s.next[k]].texel;
+      }
+    }
+  }
+  size_t size() const { return searches_.size(); }
+  uint32_t ray(uint32_t search) const { return searches_[search].ray; }
+  uint32_t texel(uint32_t search) const { return searches_[search].texel; }
+  // The nearest candidate of `kind` in sight, or kNoTexel.
+  uint32_t nearest(uint32_t search, int kind) const { return searches_[search].found[kind]; }
+
+ private:
+  struct Candidate {
+    float distance;
+    uint32_t order;  // visit order, for ties
+    uint32_t texel;
+    uint8_t kind;
+  };
+  struct Search {
+    uint32_t ray, texel, begin, end;
+    uint32_t next[kKinds];   // per kind, the candidate to test next
+    uint32_t found[kKinds];  // per kind, the nearest in sight (kNoTexel: none yet)
+  };
+  std::vector<Candidate> candidates_;
+  std::vector<Search> searches_;
+  std::vector<Ray> rays_;
+  std::vector<std::pair<uint32_t, int>> tested_;  // per ray of a round: search, kind
+  std::unique_ptr<bool[]> blocked_;
+  size_t blockedSize_ = 0;
 };
 
 // Cosine-distributed rays of one or several texels (or a cluster), traced together: the bigger
@@ -373,6 +463,10 @@ class GatherBatch {
     // have their sight lines traced, all together (TexelOfHit).
     sightRays_.clear();
     sightOf_.clear();
+    // The sight line from hit k (on texel t's surface) to texel n's sample.
+    auto sightLineOf = [&](uint32_t k, uint32_t t, uint32_t n, Ray& line) {
+      return TexelOfHit::sightLine(texels, t, hits_[k], hitPoint(k), n, line);
+    };
     auto code = [&](size_t k, uint32_t t) {
       if (t != runtime::kNoTexel)
         codes_[k] = hits_[k].frontFace ? t : (t | TexelGather::kBackSide);
@@ -409,10 +503,19 @@ class GatherBatch {
         blocked_.reset(new bool[blockedSize_]);
       }
       tracer.occluded(sightRays_.data(), blocked_.get(), lines);
+      search_.clear();
       for (size_t i = 0; i < lines; ++i) {
         const auto [k, t] = sightOf_[i];
-        code(k, blocked_[i] ? TexelOfHit::standIn(tracer, texels, t, hits_[k], hitPoint(k)) : t);
+        if (!blocked_[i]) {
+          code(k, t);
+          continue;
+        }
+        search_.open(k, t);
+        TexelOfHit::standInCandidates(texels, t, hits_[k], hitPoint(k),
+                                      [&](uint32_t n, float d, int kind) { search_.add(n, d, kind); });
       }
+      search_.run(tracer, sightLineOf);
+      for (uint32_t i = 0; i < search_.size(); ++i) code(search_.ray(i), search_.nearest(i, 0));
     }
     // Close front-side hits take the light of a texel lit like them (TexelOfHit::lightMatch).
     // The lights that reach each hit point first, every hit's shadow rays traced together
@@ -445,10 +548,23 @@ class GatherBatch {
     tracer.occluded(lightRays_.data(), blocked_.get(), lightRays_.size());
     for (size_t j = 0; j < lightRays_.size(); ++j)
       if (!blocked_[j]) checks_[lightRayOf_[j].first].second |= 1u << lightRayOf_[j].second;
+    search_.clear();
     for (const auto& [k, want] : checks_) {
       const uint32_t t = codes_[k] & TexelGather::kTexelMask;
-      const uint32_t match =
-          TexelOfHit::lightMatch(tracer, texels, *lookup, t, hits_[k], hitPoint(k), want);
+      if (!TexelOfHit::needsLightMatch(*lookup, t, want)) continue;
+      search_.open(k, want);
+      TexelOfHit::lightMatchCandidates(texels, *lookup, t, hits_[k], hitPoint(k), want,
+                                       [&](uint32_t n, float d, int kind) { search_.add(n, d, kind); });
+    }
+    // The search's texel slot holds `want`; the hit's own texel is still in its code.
+    search_.run(tracer, [&](uint32_t k, uint32_t, uint32_t n, Ray& line) {
+      return sightLineOf(k, codes_[k] & TexelGather::kTexelMask, n, line);
+    });
+    for (uint32_t i = 0; i < search_.size(); ++i) {
+      const uint32_t k = search_.ray(i), t = codes_[k] & TexelGather::kTexelMask;
+      const uint32_t match = TexelOfHit::lightMatchChoice(*lookup, t, search_.texel(i),
+                                                          search_.nearest(i, 0),
+                                                          search_.nearest(i, 1));
       codes_[k] = match == runtime::kNoTexel ? TexelGather::kNoHit : match;
     }
   }
@@ -516,6 +632,7 @@ class GatherBatch {
   std::vector<Ray> lightRays_;                             // ... their shadow rays
   std::vector<std::pair<uint32_t, uint32_t>> lightRayOf_;  // per shadow ray: check, light
   size_t blockedSize_ = 0;
+  SightSearch search_;  // stand-ins and light matches
   mutable std::vector<uint8_t> sides_;  // per tracer geometry, kUnknown until first hit
 };
 
