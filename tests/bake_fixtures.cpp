@@ -33,6 +33,25 @@ BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
   return r ? std::move(r.value()) : BakeResult{};
 }
 
+scenes::Light hardSun(glm::vec3 direction) {
+  scenes::Light sun;
+  sun.name = "sun";
+  sun.type = scenes::LightType::Directional;
+  sun.direction = glm::normalize(direction);
+  sun.angularDiameter = 0.0f;
+  return sun;
+}
+
+scenes::Scene floorUnderASlit(bool roof, float from, float width) {
+  scenes::Scene scene = groundQuad("floor", 2.0f, 0.8f, 0.0f);
+  if (roof) {
+    addBox(scene, "roof_west", {-2.5f, 1.0f, -2.5f}, {from, 1.1f, 2.5f}, 0);
+    addBox(scene, "roof_east", {from + width, 1.0f, -2.5f}, {2.5f, 1.1f, 2.5f}, 0);
+  }
+  scene.lights.push_back(hardSun({0.0f, -1.0f, 0.0f}));
+  return scene;
+}
+
 scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColor,
                          float specularFactor) {
   scenes::Scene scene;

@@ -25,6 +25,13 @@ scenes::Primitive box(glm::vec3 lo, glm::vec3 hi, int material);
 // Adds such a box to `scene` as a mesh and a static instance, both called `name`.
 void addBox(scenes::Scene& scene, const std::string& name, glm::vec3 lo, glm::vec3 hi,
             int material);
+// A directional light of no angular size (hard shadows) called "sun", shining along
+// `direction`.
+scenes::Light hardSun(glm::vec3 direction);
+// A 4 × 4 m floor (albedo 0.8) under the noon sun (hardSun), under a roof of two 10 cm thick
+// boxes 1 m up with a slit of `width` metres from x = `from` between them (without a roof
+// when `roof` is false). Not unwrapped.
+scenes::Scene floorUnderASlit(bool roof, float from, float width);
 // The white furnace as a level: the procedural box (emission 1, base colour `baseColor`)
 // written through the exporter, its one material's KHR_materials_specular put into the JSON by
 // hand (when `specular` is not null), loaded back from the file and unwrapped at 4 texels/unit.

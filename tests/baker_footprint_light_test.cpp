@@ -17,23 +17,6 @@
 namespace afterglow::baker {
 namespace {
 
-// A 4 × 4 m floor under the noon sun (hard: no angular size), under a roof 1 m up with a
-// slit of `width` metres from x = `from`, or without a roof.
-scenes::Scene floorUnderASlit(bool roof, float from, float width) {
-  scenes::Scene scene = groundQuad("floor", 2.0f, 0.8f, 0.0f);
-  if (roof) {
-    addBox(scene, "roof_west", {-2.5f, 1.0f, -2.5f}, {from, 1.1f, 2.5f}, 0);
-    addBox(scene, "roof_east", {from + width, 1.0f, -2.5f}, {2.5f, 1.1f, 2.5f}, 0);
-  }
-  scenes::Light sun;
-  sun.name = "sun";
-  sun.type = scenes::LightType::Directional;
-  sun.direction = glm::vec3(0.0f, -1.0f, 0.0f);
-  sun.angularDiameter = 0.0f;
-  scene.lights.push_back(sun);
-  return scene;
-}
-
 // Σ over the floor's front clusters of the sun's transfer × area (the reflected sunlight, up to
 // the albedo), and the same from the texels' samples.
 struct Floor {

@@ -419,24 +419,10 @@ Status computeDirect(const scenes::Scene& scene, const RayTracer& tracer, const 
       if (!texels.valid[t]) continue;
       const sampling::Rng::ItemSeed seed{
           sampling::Rng::itemSeed(sampling::Stream::LightVisibility, t)};
-      // The points jittered in their cells: at the cells' centres a shadow edge along the grid
-      // (a 20 cm sunlit strip under a slit, two texel columns lit 40% each) came out lit 50%.
-      // Multi-jittered: each row's points take the four quarters of their cells' width in a
-      // shuffled order, and each column's the four quarters of their height, so the 16 points
-      // also fall in 16 strata along each axis, and an edge along the grid is placed to a
-      // sixteenth of the texel.
+      // The points multi-jittered: at the cells' centres a shadow edge along the grid (a 20 cm
+      // sunlit strip under a slit, two texel columns lit 40% each) came out lit 50%.
       sampling::Rng place(seed, ~uint64_t(0));  // apart from every light's samples
-      int across[4] = {0, 1, 2, 3}, down[4] = {0, 1, 2, 3};
-      for (int i = 3; i > 0; --i) {
-        std::swap(across[i], across[std::min(i, int(place.next() * float(i + 1)))]);
-        std::swap(down[i], down[std::min(i, int(place.next() * float(i + 1)))]);
-      }
-      for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 4; ++x) {
-          const glm::vec2 u = place.next2();
-          jitter[y * 4 + x] = glm::vec2((float(across[y]) + u.x) * 0.25f,
-                                        (float(down[x]) + u.y) * 0.25f);
-        }
+      sampling::multiJittered16(place, jitter);
       const int n = footprintPoints(scene, texels, uint32_t(t), points, jitter);
       if (n == 0) continue;
       rays.clear();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "afterglow/core/parallel.h"
@@ -24,14 +25,16 @@ double rowSum(const SparseLinks& links, size_t r, const std::vector<float>& valu
   return sum;
 }
 
-// Row r of `links` applied to the squares of `values`.
-double rowSquares(const SparseLinks& links, size_t r, const std::vector<float>& values) {
-  double sum = 0.0;
+// rowSum, and the same of the values' squares, in one walk of the row.
+std::pair<double, double> rowSums(const SparseLinks& links, size_t r,
+                                  const std::vector<float>& values) {
+  double sum = 0.0, squares = 0.0;
   for (size_t k = links.rowStart[r]; k < links.rowStart[r + 1]; ++k) {
-    const double v = double(values[links.targetAt(k)]);
-    sum += double(links.weightAt(r, k)) * v * v;
+    const double w = double(links.weightAt(r, k)), v = double(values[links.targetAt(k)]);
+    sum += w * v;
+    squares += w * v * v;
   }
-  return sum;
+  return {sum, squares};
 }
 
 // Every gather point's first bounce of one source, per unit source and unit albedo: the
@@ -59,11 +62,14 @@ std::vector<float> firstBounce(const TransportData& d, std::vector<float> receiv
   const bool withVariance = rays.size() == d.gatherPointCount;
   variance.assign(withVariance ? d.gatherPointCount : 0, 0.0f);
   parallelFor(d.gatherPointCount, [&](size_t p) {
-    const double mean = rowSum(d.links, p, received);
+    if (!withVariance) {
+      gathered[p] = float(rowSum(d.links, p, received));
+      return;
+    }
+    const auto [mean, squares] = rowSums(d.links, p, received);
     gathered[p] = float(mean);
-    if (withVariance && rays[p] > 1)
-      variance[p] = float(std::max(0.0, rowSquares(d.links, p, received) - mean * mean) /
-                          double(rays[p] - 1));
+    if (rays[p] > 1)
+      variance[p] = float(std::max(0.0, squares - mean * mean) / double(rays[p] - 1));
   }, 1024);
   return gathered;
 }

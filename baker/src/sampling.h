@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 
 #include <glm/glm.hpp>
 
@@ -94,6 +95,23 @@ class Stratified {
   uint32_t g_;
   float inv_;
 };
+
+// 16 multi-jittered points in [0,1)² (Chiu, Shirley and Wang 1994), row by row: one in each
+// cell of a 4 × 4 grid and, the rows' and columns' sub-cells shuffled, one in each of 16
+// strata along either axis, so an edge along either axis is placed to a sixteenth.
+inline void multiJittered16(Rng& rng, glm::vec2 out[16]) {
+  int across[4] = {0, 1, 2, 3}, down[4] = {0, 1, 2, 3};
+  for (int i = 3; i > 0; --i) {
+    std::swap(across[i], across[std::min(i, int(rng.next() * float(i + 1)))]);
+    std::swap(down[i], down[std::min(i, int(rng.next() * float(i + 1)))]);
+  }
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const glm::vec2 u = rng.next2();
+      out[y * 4 + x] = glm::vec2((float(x) + (float(across[y]) + u.x) * 0.25f) * 0.25f,
+                                 (float(y) + (float(down[x]) + u.y) * 0.25f) * 0.25f);
+    }
+}
 
 // Interleaved stratification (Keller and Heidrich 2001) for the texels' gather rays: `count`
 // points on a gx × gy grid (gx·gy = count, gx ≥ gy, as square as count allows). point() jitters

@@ -499,8 +499,9 @@ int footprintPoints(const scenes::Scene& scene, const TexelSet& texels, uint32_t
   int n = 0;
   for (int y = 0; y < kSide; ++y)
     for (int x = 0; x < kSide; ++x) {
-      const glm::dvec2 at = jitter ? glm::dvec2(jitter[y * kSide + x]) : glm::dvec2(0.5);
-      const glm::dvec2 d((double(x) + at.x) / kSide - 0.5, (double(y) + at.y) / kSide - 0.5);
+      const glm::dvec2 d =
+          (jitter ? glm::dvec2(jitter[y * kSide + x])
+                  : glm::dvec2((double(x) + 0.5) / kSide, (double(y) + 0.5) / kSide)) - 0.5;
       const glm::dvec2 b = toBarycentric * (centre + d - px[0]);
       if (b.x < kInside || b.y < kInside || 1.0 - b.x - b.y < kInside) continue;
       out[n++] = glm::vec3(q[0] + b.x * (q[1] - q[0]) + b.y * (q[2] - q[0]) + lift);

@@ -68,10 +68,10 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
 // Up to 16 world points spread over texel t's footprint: a 4 × 4 grid over its atlas pixel
 // mapped through its triangle (TEXCOORD_1 in pixels to world), those that fall inside the
 // triangle, lifted off it like the sample. Returns how many (0 without lightmap UVs).
-// Each point sits at its grid cell's centre, or with `jitter` (16 points in [0, 1)², row by
-// row) at that place in its cell: a jittered grid is an unbiased estimate of a footprint mean,
-// where cell centres are off by up to an eighth of a texel at every edge that lines up with the
-// grid.
+// Each point sits at its grid cell's centre, or with `jitter` at jitter[i], 16 points in the
+// pixel's [0, 1)², row by row, point i in cell i (sampling::multiJittered16): a jittered grid is
+// an unbiased estimate of a footprint mean, where cell centres are off by up to an eighth of a
+// texel at every edge that lines up with the grid.
 int footprintPoints(const scenes::Scene& scene, const TexelSet& texels, uint32_t t,
                     glm::vec3 out[16], const glm::vec2* jitter = nullptr);
 int texelMaterial(const scenes::Scene& scene, const TexelSet& texels, uint32_t t);
