@@ -26,8 +26,8 @@ glm::vec3 get(const float* from) { return glm::vec3(from[0], from[1], from[2]); 
 }  // namespace
 
 bool loadReferenceCache(const std::string& path, const std::string& key,
-                        const baker::TexelSet& texels, const std::vector<uint32_t>& which, int spp,
-                        baker::ReferenceTexels& out, std::string& why) {
+                        const baker::TexelSet& texels, int spp, baker::ReferenceTexels& out,
+                        std::string& why) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) {
     why = "no cache yet";
@@ -42,24 +42,20 @@ bool loadReferenceCache(const std::string& path, const std::string& key,
   std::string fileKey(ok ? keyLength : 0, '\0');
   ok = ok && std::fread(fileKey.data(), 1, fileKey.size(), f) == fileKey.size() &&
        std::fread(&fileSpp, sizeof fileSpp, 1, f) == 1 &&
-       std::fread(&count, sizeof count, 1, f) == 1;
+       std::fread(&count, sizeof count, 1, f) == 1 && count < (1ull << 32);
   if (!ok) why = "not a reference cache";
   else if (fileKey != key) ok = false, why = "made for " + fileKey;
   else if (fileSpp != spp) ok = false, why = "made at " + std::to_string(fileSpp) + " paths";
-  else if (count != which.size()) ok = false, why = "made for other texels";
   std::vector<Record> records(ok ? count : 0);
   if (ok && std::fread(records.data(), sizeof(Record), records.size(), f) != records.size())
     ok = false, why = "truncated";
   std::fclose(f);
-  for (size_t i = 0; ok && i < records.size(); ++i) {
-    const Record& r = records[i];
-    ok = r.texel == which[i] && r.texel < texels.size() &&
-         get(r.position) == texels.position[r.texel] && get(r.normal) == texels.normal[r.texel];
-    if (!ok) why = "made for other texels";
-  }
   if (!ok) return false;
   out = baker::ReferenceTexels();
   for (const Record& r : records) {
+    if (r.texel >= texels.size() || get(r.position) != texels.position[r.texel] ||
+        get(r.normal) != texels.normal[r.texel])
+      continue;  // made for other texels
     out.texels.push_back(r.texel);
     out.direct.push_back(get(r.direct));
     out.indirect.push_back(get(r.indirect));
