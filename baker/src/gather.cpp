@@ -3,8 +3,9 @@
 // points that pool them.
 //
 // Bounced light is smooth away from other geometry, so a 2×2 block of texels on one surface
-// shares one gather point and each of its texels casts a quarter of the rays (interleaved, so the
-// four sets form one stratified set). Near other geometry bounced light changes within a texel
+// shares one gather point and each of its texels casts a quarter of the rays (the four sets form
+// one stratified set, and neighbouring blocks' sets one finer still: sampling::TiledSobol).
+// Near other geometry bounced light changes within a texel
 // or two: a texel there is a gather point of its own, with a full set of rays plus nearRays more
 // that resolve its near field.
 #include <algorithm>
@@ -128,8 +129,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     for (uint32_t t = 0; t < count; ++t)
       if (groupOf[t] != kNoTexel) groupTexels[fill[groupOf[t]]++] = t;
   }
-  // A full block's four texels fill the four quarters of the interleaved grid; any other texel
-  // jitters over whole cells (sampling::InterleavedGrid).
+  // A full block's four texels share one stratified set.
   auto quartered = [&](uint32_t t) { return groupSize[groupOf[t]] == 4; };
 
   // The first pass: every valid texel its share of its group's rays.
@@ -153,16 +153,23 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
       options.lightMatch ? lights.texels(tracer, texels) : std::vector<uint32_t>();
   TexelLookup lookup(texels);
   if (options.lightMatch) lookup.setLights(&lights, &reached);
-  // Texel t's first-pass samples, sample(s, u) for s = 0 .. firstCount[t]: one sequence per
-  // texel (so a ray can be cast again alike).
+  // Texel t's points of one set of rays: `set` 0 for the first pass of a full block's texels,
+  // whose four texels' points make one stratified set, 1 for any other texel's full set (its
+  // first pass or its top-up), 2 for the near set; `n` the rays of that set. Neighbours casting
+  // the same kind of set take their points from one sequence (sampling::TiledSobol), so their
+  // errors cancel instead of adding up into blotches.
+  auto tileSequence = [&](uint32_t t, uint32_t n, uint64_t set) {
+    return sampling::TiledSobol(
+        sampling::Rng::itemSeed(sampling::Stream::TexelLinks, texels.atlas[t]) ^
+            sampling::mix64((set << 32) | n),
+        texels.pixel[t].x, texels.pixel[t].y, n);
+  };
+  // Texel t's first-pass samples, sample(s, u) for s = 0 .. firstCount[t] (a pure function of
+  // the texel, so a ray can be cast again alike).
   auto firstSamples = [&](uint32_t t, auto&& sample) {
     const uint32_t n = firstCount[t];
-    const sampling::InterleavedGrid grid(n);
-    sampling::InterleavedGrid::Walk walk(grid);
-    sampling::Rng rng(sampling::Stream::TexelLinks, t, 0);
-    const bool quarter = quartered(t);
-    for (uint32_t s = 0; s < n; ++s)
-      sample(s, quarter ? walk.next(rng, texels.pixel[t].x, texels.pixel[t].y) : walk.next(rng));
+    const sampling::TiledSobol points = tileSequence(t, n, quartered(t) ? 0 : 1);
+    for (uint32_t s = 0; s < n; ++s) sample(s, points.point(s));
   };
   auto accumulate = [&](TexelRays& s, const GatherBatch::Summary& sum, uint32_t n) {
     for (int k = 0; k < kShCount; ++k) s.sky[k] += sum.sky[k];
@@ -296,20 +303,17 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         if (extraStart[t + 1] == extraStart[t]) continue;
         batchTexels.push_back(uint32_t(t));
         const sampling::Frame frame(texels.normal[t]);
-        auto cast = [&](uint32_t n, uint64_t seed, const glm::u16vec2* quarter) {
-          const sampling::InterleavedGrid grid(std::max(1u, n));
-          sampling::InterleavedGrid::Walk walk(grid);
-          sampling::Rng rng(sampling::Stream::TexelLinks, t, seed);
+        auto cast = [&](uint32_t from, uint32_t n, uint64_t set) {
+          const sampling::TiledSobol points = tileSequence(from, n, set);
           for (uint32_t s = 0; s < n; ++s)
-            batch.add(texels.position[t], frame, texels.geometricNormal[t],
-                      quarter ? walk.next(rng, quarter->x, quarter->y) : walk.next(rng));
+            batch.add(texels.position[t], frame, texels.geometricNormal[t], points.point(s));
         };
-        // Stratified sets in the order the hits are kept: the top-up (a full set), the
-        // adopted quarters (full sets of the block), then the near set.
-        cast(topUp[t], 1, nullptr);
+        // In the order the hits are kept: the top-up (a full set), the adopted texels' points
+        // (their share of their block's set), then the near set.
+        cast(uint32_t(t), topUp[t], 1);
         for (uint32_t k = adoptStart[t]; k < adoptStart[t + 1]; ++k)
-          cast(firstCount[adopted[k]], 3 + (k - adoptStart[t]), &texels.pixel[adopted[k]]);
-        cast(nearTexel[t] ? more : 0u, 2, nullptr);
+          cast(adopted[k], firstCount[adopted[k]], 0);
+        cast(uint32_t(t), nearTexel[t] ? more : 0u, 2);
       }
       if (batchTexels.empty()) break;
       batch.trace(tracer, texels, &settled);

@@ -135,8 +135,8 @@ Status refineGather(const scenes::Scene& scene, const RayTracer& tracer, const T
         const uint32_t n = extra[t];
         if (n == 0) continue;
         const sampling::Frame frame(texels.normal[t]);
-        const sampling::InterleavedGrid grid(n);
-        sampling::InterleavedGrid::Walk walk(grid);
+        const sampling::JitteredGrid grid(n);
+        sampling::JitteredGrid::Walk walk(grid);
         sampling::Rng rng(sampling::Stream::TexelLinks, t, kRefineSeed);
         for (uint32_t s = 0; s < n; ++s)
           batch.add(texels.position[t], frame, texels.geometricNormal[t], walk.next(rng));

@@ -37,8 +37,10 @@ struct LinkOptions {
   // texel in a dark corner that sees a sunlit floor far off through a gap is the gather's
   // noisiest, and on Sponza-sun counting them takes the bounced light's error from 17.7% to
   // 16.7% at 4 texels/m and 18.9% to 17.5% at 8, for 13% and 8% more links (at 8 or 32
-  // edges nothing changes: the gain is in hits beyond 8 m).
-  int nearRays = 192;
+  // edges nothing changes: the gain is in hits beyond 8 m). Since the gather's rays come from
+  // tiled Sobol' sets (sampling::TiledSobol), 128 do what 192 did (15.6% / 14.4% at 4 / 8
+  // texels/m against 16.3% / 14.3%, within a bake's own spread) for 4% fewer links.
+  int nearRays = 128;
   float nearDistance = 2.0f;   // texel edges
   float nearField = std::numeric_limits<float>::infinity();  // texel edges
   // Texels whose harmonic ray distance is under this many texel edges gather alone, with a
@@ -61,9 +63,11 @@ struct LinkOptions {
   // Shared far fields (runtime::TransportData::sharedFar): gather points whose texels lie in
   // one square of sharedFarSpan texels a side, on one surface and in sight of each other, and
   // of one kind (texels near other geometry, which gather alone, or 2×2 blocks), pool their
-  // rays that link far clusters into one row, thinned to about sharedFarPoints points' rays
-  // (sharedFarPoints × texelRays, an even share of the pool's interleaved rays, so it still
-  // covers the stratified hemisphere); each point links that row with its own far share.
+  // rays that link far clusters into one row; each point links that row with its own far
+  // share. A pool of texels near other geometry is thinned to about sharedFarPoints points'
+  // rays (sharedFarPoints × texelRays, whole points' stratified sets); a pool of blocks keeps
+  // four points' rays (a square's four full blocks, one stratified set: thinned to three, it
+  // left blotches a square wide).
   // Fewer links; fewer rays behind each point's far field, but its neighbours' rays, which the
   // smoothing would have mixed in anyway. Blocks share too since issue 16: on Sponza-sun at 4
   // texels/m that took 22% of the links away (9.3 M -> 7.3 M) at the same total error, and

@@ -27,7 +27,7 @@ namespace afterglow::runtime {
 constexpr int kShCount = 9;               // SH L2 coefficients (bands 0..2)
 constexpr uint32_t kNoTexel = 0xffffffffu;
 
-// The eight atlas neighbours of a texel.
+// The eight atlas neighbours of a texel; kNeighbourOffsets[7 - k] is opposite kNeighbourOffsets[k].
 constexpr int kNeighbourOffsets[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0},
                                          {1, 0},   {-1, 1}, {0, 1},  {1, 1}};
 
