@@ -166,10 +166,17 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
   };
   // Texel t's first-pass samples, sample(s, u) for s = 0 .. firstCount[t] (a pure function of
   // the texel, so a ray can be cast again alike).
+  // The points of a set in the order they are traced (sampling::coherentOrder).
+  auto setPoints = [&](uint32_t t, uint32_t n, uint64_t set, std::vector<glm::vec2>& out) {
+    const sampling::TiledSobol sequence = tileSequence(t, n, set);
+    out.resize(n);
+    for (uint32_t s = 0; s < n; ++s) out[s] = sequence.point(s);
+    sampling::coherentOrder(out);
+  };
   auto firstSamples = [&](uint32_t t, auto&& sample) {
-    const uint32_t n = firstCount[t];
-    const sampling::TiledSobol points = tileSequence(t, n, quartered(t) ? 0 : 1);
-    for (uint32_t s = 0; s < n; ++s) sample(s, points.point(s));
+    thread_local std::vector<glm::vec2> points;
+    setPoints(t, firstCount[t], quartered(t) ? 0 : 1, points);
+    for (uint32_t s = 0; s < points.size(); ++s) sample(s, points[s]);
   };
   auto accumulate = [&](TexelRays& s, const GatherBatch::Summary& sum, uint32_t n) {
     for (int k = 0; k < kShCount; ++k) s.sky[k] += sum.sky[k];
@@ -304,9 +311,10 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
         batchTexels.push_back(uint32_t(t));
         const sampling::Frame frame(texels.normal[t]);
         auto cast = [&](uint32_t from, uint32_t n, uint64_t set) {
-          const sampling::TiledSobol points = tileSequence(from, n, set);
-          for (uint32_t s = 0; s < n; ++s)
-            batch.add(texels.position[t], frame, texels.geometricNormal[t], points.point(s));
+          thread_local std::vector<glm::vec2> points;
+          setPoints(from, n, set, points);
+          for (const glm::vec2 u : points)
+            batch.add(texels.position[t], frame, texels.geometricNormal[t], u);
         };
         // In the order the hits are kept: the top-up (a full set), the adopted texels' points
         // (their share of their block's set), then the near set.
