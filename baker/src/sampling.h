@@ -133,9 +133,14 @@ class TiledSobol {
     const uint64_t h = mix64(seed ^ mix64((uint64_t(px >> 4) << 32) | uint64_t(py >> 4)));
     seedX_ = uint32_t(h), seedY_ = uint32_t(h >> 32);
   }
+  // Owen scrambling of a 0.32 fraction v is reverseBits(scramble(reverseBits(v))): each binary
+  // digit flipped by a hash of the digits above it, the hash working on the reversed bits,
+  // where a multiply carries low into high. Both dimensions are generated reversed already
+  // (the first is reverseBits(i), so reversed it is i itself), which saves two reversals.
   glm::vec2 point(uint32_t s) const {
     const uint32_t i = base_ + s;
-    return {toUnit(owen(reverseBits(i), seedX_)), toUnit(owen(sobolSecond(i), seedY_))};
+    return {toUnit(reverseBits(scramble(i, seedX_))),
+            toUnit(reverseBits(scramble(sobolSecondReversed(i), seedY_)))};
   }
 
  private:
@@ -152,23 +157,22 @@ class TiledSobol {
     x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
     return (x >> 16) | (x << 16);
   }
-  // The second Sobol' dimension (primitive polynomial x + 1), as a 0.32 fixed-point fraction.
-  static uint32_t sobolSecond(uint32_t i) {
+  // The second Sobol' dimension (primitive polynomial x + 1) as a 0.32 fixed-point fraction,
+  // bit-reversed: its direction numbers 1 << 31, v ^ (v >> 1), ... reversed.
+  static uint32_t sobolSecondReversed(uint32_t i) {
     uint32_t r = 0;
-    for (uint32_t v = 1u << 31; i != 0; i >>= 1, v ^= v >> 1)
+    for (uint32_t v = 1u; i != 0; i >>= 1, v ^= v << 1)
       if (i & 1u) r ^= v;
     return r;
   }
-  // Owen scrambling of a 0.32 fraction: each binary digit flipped by a hash of the digits
-  // above it. The hash works on the reversed bits, where a multiply carries low into high.
-  static uint32_t owen(uint32_t v, uint32_t seed) {
-    uint32_t x = reverseBits(v);
+  // Burley 2020's hash form of Laine and Karras's nested uniform scramble, on reversed bits.
+  static uint32_t scramble(uint32_t x, uint32_t seed) {
     x ^= x * 0x3d20adeau;
     x += seed;
     x *= (seed >> 16) | 1u;
     x ^= x * 0x05526c56u;
     x ^= x * 0x53a22864u;
-    return reverseBits(x);
+    return x;
   }
   static float toUnit(uint32_t v) { return float(v >> 8) * (1.0f / 16777216.0f); }
 
@@ -190,6 +194,21 @@ inline void coherentOrder(std::vector<glm::vec2>& points) {
     const uint32_t y = std::min(std::max(1u, gy) - 1, uint32_t(p.y * float(gy)));
     return uint64_t(y) * gx + x;
   };
+  // A net of n points holds one in each cell: placed straight into its slot. Otherwise sorted.
+  thread_local std::vector<glm::vec2> placed;
+  thread_local std::vector<uint8_t> taken;
+  placed.resize(n);
+  taken.assign(n, 0);
+  bool net = true;
+  for (uint32_t i = 0; i < n && net; ++i) {
+    const uint64_t k = key(points[i]);
+    net = k < n && !taken[k];
+    if (net) placed[k] = points[i], taken[k] = 1;
+  }
+  if (net) {
+    points.swap(placed);
+    return;
+  }
   std::stable_sort(points.begin(), points.end(), [&](glm::vec2 a, glm::vec2 b) {
     const uint64_t ka = key(a), kb = key(b);
     return ka != kb ? ka < kb : a.x < b.x;
