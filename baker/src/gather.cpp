@@ -164,8 +164,6 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
             sampling::mix64((set << 32) | n),
         texels.pixel[t].x, texels.pixel[t].y, n);
   };
-  // Texel t's first-pass samples, sample(s, u) for s = 0 .. firstCount[t] (a pure function of
-  // the texel, so a ray can be cast again alike).
   // The points of a set in the order they are traced (sampling::coherentOrder).
   auto setPoints = [&](uint32_t t, uint32_t n, uint64_t set, std::vector<glm::vec2>& out) {
     const sampling::TiledSobol sequence = tileSequence(t, n, set);
@@ -173,6 +171,8 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const RayTracer& tr
     for (uint32_t s = 0; s < n; ++s) out[s] = sequence.point(s);
     sampling::coherentOrder(out);
   };
+  // Texel t's first-pass samples, sample(s, u) for s = 0 .. firstCount[t] (a pure function of
+  // the texel, so a ray can be cast again alike).
   auto firstSamples = [&](uint32_t t, auto&& sample) {
     thread_local std::vector<glm::vec2> points;
     setPoints(t, firstCount[t], quartered(t) ? 0 : 1, points);
