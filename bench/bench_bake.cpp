@@ -195,6 +195,14 @@ int benchAccuracy(int argc, char** argv) {
   if (!referenceCache.empty() &&
       !loadReferenceCache(referenceCache, cacheKey, b.texels, spp, cached, why))
     std::printf("reference    %s: %s\n", referenceCache.c_str(), why.c_str());
+  // Texel i of `from`, appended to `to`.
+  auto appendTexel = [](baker::ReferenceTexels& to, const baker::ReferenceTexels& from, size_t i) {
+    to.texels.push_back(from.texels[i]);
+    to.direct.push_back(from.direct[i]);
+    to.indirect.push_back(from.indirect[i]);
+    to.directVariance.push_back(from.directVariance[i]);
+    to.indirectVariance.push_back(from.indirectVariance[i]);
+  };
   std::vector<uint32_t> cachedAt(b.texels.size(), UINT32_MAX), missing;
   for (size_t i = 0; i < cached.texels.size(); ++i) cachedAt[cached.texels[i]] = uint32_t(i);
   for (uint32_t t : subset)
@@ -205,11 +213,7 @@ int benchAccuracy(int argc, char** argv) {
     if (!fresh) return fail(fresh.message());
     for (size_t i = 0; i < fresh->texels.size(); ++i) {
       cachedAt[fresh->texels[i]] = uint32_t(cached.texels.size());
-      cached.texels.push_back(fresh->texels[i]);
-      cached.direct.push_back(fresh->direct[i]);
-      cached.indirect.push_back(fresh->indirect[i]);
-      cached.directVariance.push_back(fresh->directVariance[i]);
-      cached.indirectVariance.push_back(fresh->indirectVariance[i]);
+      appendTexel(cached, fresh.value(), i);
     }
     if (!referenceCache.empty() &&
         !saveReferenceCache(referenceCache, cacheKey, b.texels, spp, cached))
@@ -218,14 +222,7 @@ int benchAccuracy(int argc, char** argv) {
   if (!referenceCache.empty())
     std::printf("reference    %zu texels read from %s, %zu computed\n",
                 subset.size() - missing.size(), referenceCache.c_str(), missing.size());
-  for (uint32_t t : subset) {
-    const uint32_t i = cachedAt[t];
-    ref->texels.push_back(t);
-    ref->direct.push_back(cached.direct[i]);
-    ref->indirect.push_back(cached.indirect[i]);
-    ref->directVariance.push_back(cached.directVariance[i]);
-    ref->indirectVariance.push_back(cached.indirectVariance[i]);
-  }
+  for (uint32_t t : subset) appendTexel(ref.value(), cached, cachedAt[t]);
   const double refSeconds = secondsSince(t0);
   const baker::ReferenceComparison c =
       baker::compareToReference(ref.value(), b.texelDirect, b.texelIndirect);

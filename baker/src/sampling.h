@@ -180,41 +180,6 @@ class TiledSobol {
   uint32_t seedX_, seedY_;
 };
 
-// Points in [0,1)² reordered for tracing: row by row over a gx × gy grid of cells (gx·gy = the
-// count, as square as it allows), so consecutive rays leave in neighbouring directions. Embree
-// traces a stream of coherent rays markedly faster; in the Sobol' order each point lands far
-// from the last, which cost the gather a third of its ray rate on Sponza.
-inline void coherentOrder(std::vector<glm::vec2>& points) {
-  const uint32_t n = uint32_t(points.size());
-  uint32_t gy = uint32_t(std::sqrt(double(n)));
-  while (gy > 1 && n % gy != 0) --gy;
-  const uint32_t gx = std::max(1u, n / std::max(1u, gy));
-  auto key = [&](glm::vec2 p) {
-    const uint32_t x = std::min(gx - 1, uint32_t(p.x * float(gx)));
-    const uint32_t y = std::min(std::max(1u, gy) - 1, uint32_t(p.y * float(gy)));
-    return uint64_t(y) * gx + x;
-  };
-  // A net of n points holds one in each cell: placed straight into its slot. Otherwise sorted.
-  thread_local std::vector<glm::vec2> placed;
-  thread_local std::vector<uint8_t> taken;
-  placed.resize(n);
-  taken.assign(n, 0);
-  bool net = true;
-  for (uint32_t i = 0; i < n && net; ++i) {
-    const uint64_t k = key(points[i]);
-    net = k < n && !taken[k];
-    if (net) placed[k] = points[i], taken[k] = 1;
-  }
-  if (net) {
-    points.swap(placed);
-    return;
-  }
-  std::stable_sort(points.begin(), points.end(), [&](glm::vec2 a, glm::vec2 b) {
-    const uint64_t ka = key(a), kb = key(b);
-    return ka != kb ? ka < kb : a.x < b.x;
-  });
-}
-
 // A jittered grid for the refined gather's extra rays: `count` points on a gx × gy grid (gx·gy
 // = count, gx ≥ gy, as square as count allows), one jittered point per cell.
 struct JitteredGrid {
@@ -252,6 +217,41 @@ struct JitteredGrid {
     uint32_t x_ = 0, y_ = 0;  // index % gx, (index / gx) % gy
   };
 };
+
+// Points in [0,1)² reordered for tracing: row by row over JitteredGrid's cells for their count,
+// so consecutive rays leave in neighbouring directions. Embree traces a stream of coherent rays
+// markedly faster; in the Sobol' order each point lands far from the last, which cost the
+// gather a third of its ray rate on Sponza.
+inline void coherentOrder(std::vector<glm::vec2>& points) {
+  const uint32_t n = uint32_t(points.size());
+  if (n == 0) return;
+  const JitteredGrid grid(n);  // its cells
+  const uint32_t gx = grid.gx, gy = grid.gy;
+  auto key = [&](glm::vec2 p) {
+    const uint32_t x = std::min(gx - 1, uint32_t(p.x * float(gx)));
+    const uint32_t y = std::min(gy - 1, uint32_t(p.y * float(gy)));
+    return uint64_t(y) * gx + x;
+  };
+  // A net of n points holds one in each cell: placed straight into its slot. Otherwise sorted.
+  thread_local std::vector<glm::vec2> placed;
+  thread_local std::vector<uint8_t> taken;
+  placed.resize(n);
+  taken.assign(n, 0);
+  bool net = true;
+  for (uint32_t i = 0; i < n && net; ++i) {
+    const uint64_t k = key(points[i]);
+    net = k < n && !taken[k];
+    if (net) placed[k] = points[i], taken[k] = 1;
+  }
+  if (net) {
+    points.swap(placed);
+    return;
+  }
+  std::stable_sort(points.begin(), points.end(), [&](glm::vec2 a, glm::vec2 b) {
+    const uint64_t ka = key(a), kb = key(b);
+    return ka != kb ? ka < kb : a.x < b.x;
+  });
+}
 
 // cos and sin of 2π·t for t in [0, 1): a minimax polynomial on an octant (|error| < 4e-7, as
 // good as float sinf), five times cheaper than sincosf; sampling calls it for every ray.

@@ -92,9 +92,7 @@ void buildGatherMaps(TransportData& d, const ParallelFor& parallelFor) {
   d.pointFilter = SparseMatrix();
   if (!smooth) return;
   std::vector<uint32_t> start(size_t(points) + 1, 0), members;
-  for (uint32_t p : d.texelPoint)
-    if (p != kNoTexel) ++start[p + 1];
-  for (uint32_t p = 0; p < points; ++p) start[p + 1] += start[p];
+  for (uint32_t p = 0; p < points; ++p) start[p + 1] = start[p] + pointSize[p];
   members.resize(start[points]);
   std::vector<uint32_t> next(start.begin(), start.end() - 1);
   for (uint32_t t = 0; t < count; ++t)
