@@ -36,6 +36,7 @@
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/solver.h"
+#include "afterglow/scenes/material_eval.h"
 #include "bench_accuracy_breakdown.h"
 #include "bench_common.h"
 
@@ -168,7 +169,7 @@ void printIndirectBreakdown(const scenes::Scene& scene, const baker::RayTracer& 
         continue;
       }
       const uint32_t c = clusters.texelCluster[h];
-      const glm::dvec3 albedo(baker::diffuseAlbedo(scene, material, tracer.uv(hit, 0)));
+      const glm::dvec3 albedo(scenes::diffuseAlbedo(scene, material, tracer.uv(hit, 0)));
       const glm::dvec3 direct(b.texelDirect[h]);
       const glm::dvec3 bounced = glm::dvec3(clusters.albedo[c]) * clusterIndirect[c];
       const bool near = double(hit.t) < kNear * std::sqrt(clusterArea[c]);

@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/bake_output.h"
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/reference.h"
+#include "afterglow/core/memory.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/uv/unwrap.h"
 #include "bench_common.h"
@@ -263,7 +263,7 @@ int sponza(int threads) {
   Result<baker::BakeResult> baked = baker::bake(scene, baker::BakeOptions());
   const double seconds = secondsSince(start);
   if (!baked) return fail(baked.message());
-  const double peak = double(baker::peakMemoryBytes()) / 1e9;  // before anything else runs
+  const double peak = double(peakMemoryBytes()) / 1e9;  // before anything else runs
   // A second, identical run (the bake is deterministic) for the throughput's best time, after
   // the first is released; raw Embree passes after each.
   Throughput throughput(scene);

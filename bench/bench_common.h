@@ -6,15 +6,11 @@
 #include <string>
 
 #include "afterglow/core/status.h"
+#include "afterglow/core/timer.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
 
 namespace afterglow::bench {
-
-using Clock = std::chrono::steady_clock;
-inline double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 inline int fail(const std::string& message) {
   std::fprintf(stderr, "afterglow_bench: %s\n", message.c_str());

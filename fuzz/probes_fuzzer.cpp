@@ -10,14 +10,9 @@
 #include <cstdlib>
 #include <string>
 
+#include "afterglow/core/math.h"
 #include "afterglow/probes/probes_file.h"
 #include "afterglow/runtime/probe_sh_file.h"
-
-namespace {
-
-bool finite(glm::vec3 p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
-
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace afterglow;
@@ -25,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (Result<probes::UserProbes> user = probes::parseUserProbes(text, "fuzz.json")) {
     if (user->names.size() != user->positions.size()) std::abort();
     for (const glm::vec3& p : user->positions)
-      if (!finite(p)) std::abort();
+      if (!afterglow::finite(p)) std::abort();
   }
   if (Result<probes::ProbesFile> file = probes::parseProbesFile(text, "fuzz.json")) {
     const size_t n = file->positions.size();
@@ -33,9 +28,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       std::abort();
     if (!runtime::checkProbeTetrahedra(file->mesh).empty()) std::abort();
     for (const glm::vec3& p : file->positions)
-      if (!finite(p)) std::abort();
+      if (!afterglow::finite(p)) std::abort();
     for (const probes::ReflectionProbeEntry& r : file->reflectionProbes) {
-      if (r.name.empty() || !finite(r.position) || !finite(r.size)) std::abort();
+      if (r.name.empty() || !afterglow::finite(r.position) || !afterglow::finite(r.size))
+        std::abort();
       if (!(r.size.x > 0.0f && r.size.y > 0.0f && r.size.z > 0.0f)) std::abort();
       if (!(r.blendDistance >= 0.0f) || !std::isfinite(r.blendDistance)) std::abort();
       if (r.resolution < 8 || r.resolution > 2048 || (r.resolution & (r.resolution - 1))) std::abort();
@@ -47,7 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (size != runtime::kProbeShHeaderSize + sh.sh.size() * 27 * 4) std::abort();
     for (const runtime::ShL2& s : sh.sh)
       for (const glm::vec3& c : s.c)
-        if (!finite(c)) std::abort();
+        if (!afterglow::finite(c)) std::abort();
   } else if (error.empty() || error.find('\n') != std::string::npos) {
     std::abort();
   }

@@ -19,6 +19,7 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/scenes/gltf.h"
+#include "afterglow/scenes/material_eval.h"
 #include "afterglow/scenes/procedural.h"
 #include "afterglow/uv/unwrap.h"
 #include "../baker/src/lightmap_post.h"

@@ -19,6 +19,7 @@
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/runtime/solver.h"
+#include "afterglow/scenes/material_eval.h"
 #include "afterglow/uv/unwrap.h"
 #include "../baker/src/path_tracer.h"
 #include "bake_fixtures.h"

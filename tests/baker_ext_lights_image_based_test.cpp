@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "afterglow/baker/ext_lights_image_based.h"
+#include "afterglow/core/math.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "test_util.h"
 
@@ -22,7 +23,6 @@ using nlohmann::json;
 namespace afterglow::baker {
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
 
 // Babylon.js's shading of irradianceCoefficients C, from its source: the loader scales by
 // intensity and 1/π (convertIrradianceToLambertianRadiance), the SH shader path sums

@@ -19,9 +19,10 @@
 #include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/scenes/gltf.h"
+#include "afterglow/scenes/material_eval.h"
 #include "afterglow/scenes/procedural.h"
 #include "afterglow/uv/unwrap.h"
-#include "../uv/src/texel_raster.h"
+#include "afterglow/uv/texel_raster.h"
 #include "bake_fixtures.h"
 #include "test_util.h"
 
@@ -60,10 +61,10 @@ int instanceNamed(const Scene& scene, const std::string& name) {
 // World-space triangles of an instance.
 std::vector<glm::vec3> worldTriangles(const Scene& scene, int instance) {
   std::vector<glm::vec3> out;
-  const scenes::Instance& inst = scene.instances[size_t(instance)];
-  for (const scenes::Primitive& prim : scene.meshes[size_t(inst.mesh)].primitives)
-    for (uint32_t i : prim.indices)
-      out.push_back(glm::vec3(inst.transform * glm::vec4(prim.positions[i], 1.0f)));
+  scenes::forEachWorldTriangle(scene, scene.instances[size_t(instance)],
+                               [&](size_t, size_t, glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+                                 out.insert(out.end(), {a, b, c});
+                               });
   return out;
 }
 
@@ -102,7 +103,7 @@ TEST(BakerTexels, QuadCoverageAreaAndPlacement) {
   const glm::dvec2 size(inst.lightmap.width, inst.lightmap.height);
   std::set<std::pair<int, int>> covered;
   for (size_t t = 0; t < prim.triangleCount(); ++t)
-    uv::detail::rasterizeTriangle(glm::dvec2(prim.uv1[prim.indices[3 * t]]) * size,
+    uv::rasterizeTriangle(glm::dvec2(prim.uv1[prim.indices[3 * t]]) * size,
                                   glm::dvec2(prim.uv1[prim.indices[3 * t + 1]]) * size,
                                   glm::dvec2(prim.uv1[prim.indices[3 * t + 2]]) * size, 0.0,
                                   inst.lightmap.width, inst.lightmap.height,
@@ -164,7 +165,7 @@ TEST(BakerTexels, PartialTexelsStayOnTheTriangle) {
   const TexelSet texels = texelsOrDie(scene, *tracer);
   std::set<std::pair<int, int>> covered;
   const glm::dvec2 size(16.0);
-  uv::detail::rasterizeTriangle(glm::dvec2(p.uv1[0]) * size, glm::dvec2(p.uv1[1]) * size,
+  uv::rasterizeTriangle(glm::dvec2(p.uv1[0]) * size, glm::dvec2(p.uv1[1]) * size,
                                 glm::dvec2(p.uv1[2]) * size, 0.0, 16, 16,
                                 [&](int x, int y) { covered.insert({x, y}); });
   EXPECT_EQ(texels.size(), covered.size());
@@ -595,7 +596,7 @@ TEST(BakerAlbedo, TableOfMaterials) {
        glm::vec3(0.5 * 0.5 * (1 - ninth / 2) + (ninth / 2 * 0.5 + 0.5 * 0.5) * 0.5)},
   };
   for (const Row& r : rows) {
-    AlbedoInputs in;
+    scenes::AlbedoInputs in;
     in.baseColor = r.base;
     in.metallic = r.metallic;
     in.roughness = r.roughness;
@@ -631,7 +632,7 @@ TEST(BakerAlbedo, SpecularZeroIsLambertian) {
     return float(state >> 8) / float(1u << 24);
   };
   for (int i = 0; i < 10000; ++i) {
-    AlbedoInputs in;
+    scenes::AlbedoInputs in;
     in.baseColor = glm::vec3(unit(), unit(), unit());
     in.metallic = 0.0f;
     in.roughness = unit();
@@ -656,7 +657,7 @@ TEST(BakerAlbedo, NeverAboveOne) {
   const float colourGrid[] = {0.0f, 0.5f, 1.0f, 4.0f, 25.0f, 1e6f};
   float worst = 0.0f;
   size_t checked = 0;
-  auto check = [&](const AlbedoInputs& in) {
+  auto check = [&](const scenes::AlbedoInputs& in) {
     const glm::vec3 a = bounceAlbedo(in);
     for (int k = 0; k < 3; ++k) {
       ASSERT_TRUE(std::isfinite(a[k]));
@@ -675,7 +676,7 @@ TEST(BakerAlbedo, NeverAboveOne) {
           for (float specular : unitGrid)
             for (float c0 : colourGrid)
               for (float c1 : {0.0f, 1.0f, 25.0f}) {
-                AlbedoInputs in;
+                scenes::AlbedoInputs in;
                 in.baseColor = glm::vec3(b, 1.0f, 0.0f);
                 in.metallic = metallic;
                 in.roughness = roughness;
@@ -691,7 +692,7 @@ TEST(BakerAlbedo, NeverAboveOne) {
     return float(state >> 8) / float((1u << 24) - 1u);
   };
   for (int i = 0; i < 200000; ++i) {
-    AlbedoInputs in;
+    scenes::AlbedoInputs in;
     in.baseColor = glm::vec3(unit(), unit(), unit());
     in.metallic = unit();
     in.roughness = unit();
@@ -759,9 +760,9 @@ TEST(BakerTexels, SponzaAreasAndValidity) {
         if (std::abs(e1.x * e2.y - e1.y * e2.x) * float(inst.lightmap.width) *
                 float(inst.lightmap.height) <= 2e-12f)
           continue;
-        const glm::vec3 p0(inst.transform * glm::vec4(prim.positions[i[0]], 1.0f));
-        const glm::vec3 p1(inst.transform * glm::vec4(prim.positions[i[1]], 1.0f));
-        const glm::vec3 p2(inst.transform * glm::vec4(prim.positions[i[2]], 1.0f));
+        const glm::vec3 p0 = inst.toWorld(prim.positions[i[0]]);
+        const glm::vec3 p1 = inst.toWorld(prim.positions[i[1]]);
+        const glm::vec3 p2 = inst.toWorld(prim.positions[i[2]]);
         worldArea += 0.5 * double(glm::length(glm::cross(p1 - p0, p2 - p0)));
       }
     }

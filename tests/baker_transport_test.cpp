@@ -11,6 +11,7 @@
 
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/transport_precompute.h"
+#include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/scenes/procedural.h"
@@ -20,7 +21,6 @@ namespace afterglow::baker {
 namespace {
 
 using scenes::Scene;
-constexpr float kPi = 3.14159265358979323846f;
 constexpr float kY00 = 0.282094791773878f;  // 1 / (2√π)
 
 scenes::Material material(const std::string& name, glm::vec3 albedo, glm::vec3 emission = {}) {
@@ -719,8 +719,8 @@ TEST(BakerTransport, CornellLampOnTheFloorMatchesQuadrature) {
     const scenes::Instance& inst = scene.instances[i];
     if (inst.name == "floor") floorInstance = i;
     if (inst.name != "light") continue;
-    for (const scenes::Primitive& p : scene.meshes[size_t(inst.mesh)].primitives)
-      for (uint32_t idx : p.indices) tri.push_back(glm::vec3(inst.transform * glm::vec4(p.positions[idx], 1.0f)));
+    scenes::forEachWorldTriangle(scene, inst, [&](size_t, size_t, glm::vec3 a, glm::vec3 b,
+                                                  glm::vec3 c) { tri.insert(tri.end(), {a, b, c}); });
   }
   ASSERT_FALSE(tri.empty());
   ASSERT_NE(floorInstance, ~0u);

@@ -12,6 +12,7 @@
 #include <array>
 #include <algorithm>
 
+#include "afterglow/core/math.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/uv/charts.h"
 #include "test_util.h"
@@ -22,7 +23,6 @@ namespace {
 using scenes::Mesh;
 using scenes::Primitive;
 
-constexpr float kPi = 3.14159265358979f;
 
 Mesh single(Primitive p) {
   Mesh mesh;

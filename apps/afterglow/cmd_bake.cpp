@@ -12,6 +12,7 @@
 
 #include "afterglow/baker/bake.h"
 #include "afterglow/core/atomic_file.h"
+#include "afterglow/core/memory.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/uv/unwrap.h"
 #include "afterglow/baker/bake_output.h"
@@ -573,7 +574,7 @@ int runBake(int argc, char** argv, int first) {
     for (const baker::StageTime& s : info.extraStages) std::printf(" %s %.2f s,", s.name.c_str(), s.seconds);
     for (const baker::StageTime& s : r.stages) std::printf(" %s %.2f s,", s.name.c_str(), s.seconds);
     std::printf(" write %.2f s\n", secondsSince(t0));
-    std::printf("peak memory   %.2f GB\n", double(baker::peakMemoryBytes()) / 1e9);
+    std::printf("peak memory   %.2f GB\n", double(peakMemoryBytes()) / 1e9);
     for (const std::string& w : info.warnings) std::printf("warning       %s\n", w.c_str());
     for (const std::string& w : r.warnings) std::printf("warning       %s\n", w.c_str());
     std::printf("wrote         %s (%zu files)\n", outDir.c_str(), written->size());

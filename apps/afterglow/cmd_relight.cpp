@@ -14,13 +14,13 @@
 #include <nlohmann/json.hpp>
 
 #include "afterglow/baker/bake_output.h"
-#include "afterglow/baker/clusters.h"
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/status.h"
 #include "afterglow/probes/probes_file.h"
 #include "afterglow/runtime/probe_sh_file.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/scenes/gltf.h"
+#include "afterglow/scenes/material_eval.h"
 #include "args.h"
 #include "baked_probes.h"
 #include "commands.h"
@@ -412,7 +412,7 @@ int runRelight(int argc, char** argv, int first) {
     }
     const scenes::Material& params = bakedScene->material(materialMap.sceneMaterial(material));
     glm::vec3 base;
-    const bool invertible = baker::baseColorForAlbedoFactor(params, albedo, &base);
+    const bool invertible = scenes::baseColorForAlbedoFactor(params, albedo, &base);
     if (!invertible) {
       base = glm::clamp(albedo, glm::vec3(0.0f), glm::vec3(1.0f));
       const std::string albedoText = format("%g, %g, %g", v[0], v[1], v[2]);

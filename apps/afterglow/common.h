@@ -9,6 +9,7 @@
 
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
+#include "afterglow/core/timer.h"
 #include "afterglow/scenes/scene.h"
 
 namespace afterglow::cli {
@@ -20,9 +21,6 @@ bool parseVec3(const std::string& text, glm::vec3* out);
 
 // Prints "afterglow: <message>" to stderr.
 void printError(const std::string& message);
-// Seconds since t (the commands' stage timings).
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t);
 // Whether s ends in suffix (output file extensions).
 bool endsWith(const std::string& s, const std::string& suffix);
 

@@ -9,6 +9,7 @@
 
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/core/timer.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/baker/reference.h"
 #include "filter_light_edges.h"
@@ -18,12 +19,6 @@
 namespace afterglow::baker {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 // The authored light settings the solve uses: light sources follow Scene::lights in order
 // (matched by name when the counts differ).

@@ -1,6 +1,5 @@
 #include "afterglow/baker/bake_output.h"
 
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,6 +10,7 @@
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
+#include "afterglow/core/memory.h"
 #include "afterglow/runtime/transport_file.h"
 #include "afterglow/scenes/gltf.h"
 
@@ -150,12 +150,6 @@ void attachLightmaps(json& doc, size_t atlasCount, std::vector<std::string>& war
 }
 
 }  // namespace
-
-size_t peakMemoryBytes() {
-  struct rusage usage {};
-  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
-  return size_t(usage.ru_maxrss) * 1024;  // Linux reports kilobytes
-}
 
 float autoExposure(const std::vector<glm::vec3>& pixels, const std::vector<uint8_t>& mask) {
   std::vector<float> lum;

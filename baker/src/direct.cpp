@@ -18,7 +18,6 @@ namespace afterglow::baker {
 
 namespace {
 
-using sampling::kPi;
 
 int primitiveMaterial(const scenes::Scene& scene, const Hit& hit) {
   const scenes::Instance& inst = scene.instances[hit.instance];

@@ -3,11 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-namespace afterglow::baker {
+#include "afterglow/core/math.h"
 
-namespace {
-constexpr float kPi = 3.14159265358979323846f;
-}
+namespace afterglow::baker {
 
 std::vector<Emitter> collectEmitters(const scenes::Scene& scene) {
   std::vector<Emitter> emitters;
@@ -31,17 +29,13 @@ std::vector<Emitter> collectEmitters(const scenes::Scene& scene) {
       }
       Emitter& e = emitters[size_t(slot)];
       const std::vector<glm::vec2>& uvs = m.emissiveTexture.texCoord == 1 ? prim.uv1 : prim.uv0;
-      for (size_t k = 0; k + 2 < prim.indices.size(); k += 3) {
-        const uint32_t i0 = prim.indices[k], i1 = prim.indices[k + 1], i2 = prim.indices[k + 2];
-        if (i0 >= prim.positions.size() || i1 >= prim.positions.size() ||
-            i2 >= prim.positions.size())
-          continue;
-        const glm::vec3 a(inst.transform * glm::vec4(prim.positions[i0], 1.0f));
-        const glm::vec3 b(inst.transform * glm::vec4(prim.positions[i1], 1.0f));
-        const glm::vec3 c(inst.transform * glm::vec4(prim.positions[i2], 1.0f));
+      scenes::forEachWorldTriangle(inst, prim, [&](size_t k, glm::vec3 a, glm::vec3 b,
+                                                   glm::vec3 c) {
+        const uint32_t i0 = prim.indices[3 * k], i1 = prim.indices[3 * k + 1],
+                       i2 = prim.indices[3 * k + 2];
         const glm::vec3 cr = glm::cross(b - a, c - a);
         const float area = 0.5f * glm::length(cr);
-        if (!(area > 0.0f) || !std::isfinite(area)) continue;
+        if (!(area > 0.0f) || !std::isfinite(area)) return;
         EmitterTriangle tri;
         tri.p0 = a;
         tri.e1 = b - a;
@@ -55,7 +49,7 @@ std::vector<Emitter> collectEmitters(const scenes::Scene& scene) {
         e.triangles.push_back(tri);
         e.totalArea += area;
         e.cdf.push_back(e.totalArea);
-      }
+      });
     }
   }
   emitters.erase(std::remove_if(emitters.begin(), emitters.end(),

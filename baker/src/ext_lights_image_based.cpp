@@ -8,6 +8,8 @@
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
+#include "afterglow/core/math.h"
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -15,7 +17,6 @@ namespace afterglow::baker {
 
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
 // Â_l per coefficient (Ramamoorthi & Hanrahan), and the sign each coefficient takes into
 // Babylon's basis (Condon–Shortley phase) and frame (x negated): header.
 constexpr float kCosineLobe[runtime::kShCount] = {kPi,        2 * kPi / 3, 2 * kPi / 3,

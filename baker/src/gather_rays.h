@@ -16,6 +16,7 @@
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/texels.h"
 #include "afterglow/baker/transport_precompute.h"
+#include "afterglow/scenes/material_eval.h"
 #include "light_visibility.h"
 #include "sampling.h"
 

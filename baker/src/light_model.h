@@ -51,7 +51,7 @@ inline LightView viewLight(const scenes::Light& light, glm::vec3 p, glm::vec3 n)
   if (light.type == scenes::LightType::Directional) {
     v.toCentre = -glm::normalize(light.direction);
     const float cosTheta = glm::dot(n, v.toCentre);
-    if (cosTheta > 0.0f) v.transfer = cosTheta / sampling::kPi;
+    if (cosTheta > 0.0f) v.transfer = cosTheta / kPi;
     v.hasExtent = light.angularDiameter > 0.0f;
     return v;
   }
@@ -64,7 +64,7 @@ inline LightView viewLight(const scenes::Light& light, glm::vec3 p, glm::vec3 n)
   if (cosTheta <= 0.0f) return v;
   float falloff = rangeWindow(dist, light.range) / (dist * dist);
   if (light.type == scenes::LightType::Spot) falloff *= spotCone(light, -v.toCentre);
-  v.transfer = std::max(0.0f, cosTheta / sampling::kPi * falloff);
+  v.transfer = std::max(0.0f, cosTheta / kPi * falloff);
   v.hasExtent = light.radius > 0.0f;
   return v;
 }

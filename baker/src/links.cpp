@@ -13,6 +13,7 @@
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/scenes/material_eval.h"
 #include "far_targets.h"
 #include "gather_rays.h"
 #include "sampling.h"
@@ -23,7 +24,6 @@ namespace {
 
 using runtime::kNoTexel;
 using runtime::kShCount;
-using sampling::kPi;
 
 struct Link {
   uint32_t cluster;

@@ -9,7 +9,6 @@
 namespace afterglow::baker {
 
 using runtime::kShCount;
-using sampling::kPi;
 
 glm::vec3 equalAreaOctahedral(glm::vec2 p) {
   const float u = std::clamp(p.x, -1.0f, 1.0f), v = std::clamp(p.y, -1.0f, 1.0f);

@@ -35,7 +35,6 @@ namespace {
 
 using runtime::kNoTexel;
 using runtime::kShCount;
-using sampling::kPi;
 
 // Per probe, what its rays and shadow rays gave, before the probes are joined in order.
 struct ProbeResult {

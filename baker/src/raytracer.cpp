@@ -11,6 +11,9 @@
 
 #include <embree3/rtcore.h>
 
+#include "afterglow/core/math.h"
+#include "afterglow/core/timer.h"
+
 namespace afterglow::baker {
 namespace {
 
@@ -68,7 +71,6 @@ void alphaFilter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // Rays Embree must not see: it asserts tnear ≤ tfar and finite inputs only in debug builds.
 bool traceable(const Ray& ray) {
@@ -235,7 +237,7 @@ Status RayTracer::Impl::addGeometry(uint32_t instanceIndex, uint32_t primitiveIn
   glm::vec3 parking(0.0f);
   bool haveParking = false;
   for (size_t i = 0; i < vertexCount; ++i) {
-    const glm::vec3 w = glm::vec3(inst.transform * glm::vec4(prim.positions[i], 1.0f));
+    const glm::vec3 w = inst.toWorld(prim.positions[i]);
     if (finite(w)) {
       if (!haveParking) parking = w, haveParking = true;
     } else {
@@ -358,8 +360,7 @@ Result<std::unique_ptr<RayTracer>> RayTracer::build(const scenes::Scene& scene,
     return Result<std::unique_ptr<RayTracer>>::error("building the ray-tracing BVH: " + error);
   impl->stats.embreeBytes = size_t(std::max<int64_t>(0, impl->embreeBytes.load()));
   impl->stats.embreePeakBytes = size_t(std::max<int64_t>(0, impl->embreePeakBytes.load()));
-  impl->stats.buildSeconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  impl->stats.buildSeconds = secondsSince(start);
   return std::unique_ptr<RayTracer>(new RayTracer(std::move(impl)));
 }
 
@@ -620,8 +621,7 @@ double RayTracer::measureRawThroughput(const Ray* rays, size_t count, Query quer
       acc += r.tfar < 0.0f ? 1u : 0u;
     }
   }
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = secondsSince(start);
   sink = acc;
   (void)sink;
   impl_->count(count, query);

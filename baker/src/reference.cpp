@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "afterglow/baker/clusters.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/solver.h"
+#include "afterglow/scenes/material_eval.h"
 #include "light_model.h"
 #include "path_tracer.h"
 
@@ -15,7 +15,6 @@ namespace afterglow::baker {
 
 namespace {
 
-using sampling::kPi;
 
 glm::vec3 skyRadiance(const glm::vec3 sh[runtime::kShCount], glm::vec3 direction) {
   float y[runtime::kShCount];
@@ -200,7 +199,7 @@ glm::vec3 PathTracer::probeRadiance(const Ray& ray, int specularDepth, sampling:
   const glm::vec2 uv0 = tracer_.uv(hit, 0);
   glm::vec3 radiance =
       mat.emitsFrom(hit.frontFace) ? emittedRadiance(scene_, material, uv0) : glm::vec3(0.0f);
-  const SurfaceBrdf brdf = surfaceBrdf(scene_, material, uv0);
+  const scenes::SurfaceBrdf brdf = surfaceBrdf(scene_, material, uv0);
   const float side = hit.frontFace ? 1.0f : -1.0f;
   const glm::vec3 ng = hit.geometricNormal * side;
   glm::vec3 n = tracer_.shadingNormal(hit) * side;

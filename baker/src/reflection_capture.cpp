@@ -4,8 +4,8 @@
 #include <cmath>
 #include <string>
 
-#include "afterglow/baker/clusters.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/scenes/material_eval.h"
 
 namespace afterglow::baker {
 
@@ -51,7 +51,7 @@ ReflectionHit recordHit(const scenes::Scene& scene, const RayTracer& tracer, con
   // The back of a single-sided surface is black, as in the baked render: everything stays 0.
   if (!hit.frontFace && !mat.doubleSided) return h;
   const glm::vec2 uv0 = tracer.uv(hit, 0);
-  const SurfaceBrdf brdf = surfaceBrdf(scene, material, uv0);
+  const scenes::SurfaceBrdf brdf = surfaceBrdf(scene, material, uv0);
   const int atlas = inst.lightmap.atlas;
   if (inst.isStatic && atlas >= 0 && size_t(atlas) < atlasCount) {
     h.atlas = uint16_t(atlas);

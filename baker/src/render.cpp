@@ -7,13 +7,13 @@
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
-#include "afterglow/baker/clusters.h"
 #include "afterglow/baker/raytracer.h"
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/baker/bake_output.h"
 #include "afterglow/baker/reflection_exr.h"
 #include "afterglow/runtime/solver.h"
+#include "afterglow/scenes/material_eval.h"
 #include "path_tracer.h"
 #include "sampling.h"
 #include "sky_image.h"
@@ -104,7 +104,7 @@ glm::vec3 bakedRadiance(const scenes::Scene& scene, const RayTracer& tracer,
   glm::vec3 radiance(0.0f);
   if (mat.emitsFrom(hit.frontFace)) radiance += emittedRadiance(scene, material, uv0);
   if (!reflections) return radiance + diffuseAlbedo(scene, material, uv0) * light;
-  const SurfaceBrdf brdf = surfaceBrdf(scene, material, uv0);
+  const scenes::SurfaceBrdf brdf = surfaceBrdf(scene, material, uv0);
   glm::vec3 normal = tracer.shadingNormal(hit);
   if (!hit.frontFace) normal = -normal;
   return radiance + brdf.diffuse * light +

@@ -11,12 +11,11 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/core/math.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/transport.h"
 
 namespace afterglow::baker::sampling {
-
-constexpr float kPi = 3.14159265358979323846f;
 
 // Streams keep the sequences of different stages independent for the same (item, sample).
 enum class Stream : uint64_t {

@@ -5,6 +5,8 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "afterglow/core/math.h"
+
 #include "sampling.h"
 
 namespace afterglow::baker {
@@ -22,14 +24,13 @@ Status projectEquirectSky(const std::string& path, glm::vec3 sh[runtime::kShCoun
     return Status::error(format("%s: cannot decode the sky image (%s)", path.c_str(),
                                 in->geterror().c_str()));
   in->close();
-  constexpr double kPi = 3.14159265358979323846;
   // Doubles: a 4k sky sums 8M terms.
   double acc[runtime::kShCount][3] = {};
   for (int y = 0; y < h; ++y) {
-    const double theta = kPi * (y + 0.5) / h;
-    const double solidAngle = (2.0 * kPi / w) * (kPi / h) * std::sin(theta);
+    const double theta = kPiDouble * (y + 0.5) / h;
+    const double solidAngle = (2.0 * kPiDouble / w) * (kPiDouble / h) * std::sin(theta);
     for (int x = 0; x < w; ++x) {
-      const double phi = 2.0 * kPi * (x + 0.5) / w;
+      const double phi = 2.0 * kPiDouble * (x + 0.5) / w;
       const glm::vec3 d(float(std::sin(theta) * std::cos(phi)), float(std::cos(theta)),
                         float(std::sin(theta) * std::sin(phi)));
       const float* p = &pixels[(size_t(y) * size_t(w) + size_t(x)) * size_t(channels)];

@@ -10,17 +10,17 @@
 #include <vector>
 
 #include "afterglow/baker/raytracer.h"
+#include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
 
 // The uv module's rasteriser, so texels cover exactly the footprint the packer reserved.
-#include "../../uv/src/texel_raster.h"
+#include "afterglow/uv/texel_raster.h"
 
 namespace afterglow::baker {
 namespace {
 
 using runtime::kNoTexel;
 
-constexpr float kPi = 3.14159265358979323846f;
 
 // One triangle touching one pixel.
 struct Touch {
@@ -145,7 +145,7 @@ std::vector<Touch> rasterizeInstance(const scenes::Scene& scene, const scenes::I
       if (!(uvArea > 1e-12) || !std::isfinite(uvArea) || !std::isfinite(worldArea)) continue;
       const double ratio = worldArea / uvArea;
       const double texelSize = std::sqrt(ratio);
-      uv::detail::rasterizeTriangle(a, b, c, uv::detail::kPackGrow, width, height,
+      uv::rasterizeTriangle(a, b, c, uv::kPackGrow, width, height,
                                     [&](int x, int y) {
         Touch touch;
         touch.pixel = uint32_t(y) * uint32_t(width) + uint32_t(x);
@@ -319,9 +319,9 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& trac
       const scenes::Instance& inst = scene.instances[r.instance];
       const scenes::Primitive& prim = scene.meshes[size_t(inst.mesh)].primitives[r.touch.primitive];
       const uint32_t* idx = &prim.indices[3 * size_t(r.touch.triangle)];
-      const glm::vec3 p0(inst.transform * glm::vec4(prim.positions[idx[0]], 1.0f));
-      const glm::vec3 p1(inst.transform * glm::vec4(prim.positions[idx[1]], 1.0f));
-      const glm::vec3 p2(inst.transform * glm::vec4(prim.positions[idx[2]], 1.0f));
+      const glm::vec3 p0 = inst.toWorld(prim.positions[idx[0]]);
+      const glm::vec3 p1 = inst.toWorld(prim.positions[idx[1]]);
+      const glm::vec3 p2 = inst.toWorld(prim.positions[idx[2]]);
       const float texelSize = float(r.touch.texelSize);
       // A texel centre outside its triangle gets the closest point of the triangle, which lies
       // on an edge, often where two walls meet; rays from exactly there see through the corner.
@@ -487,7 +487,7 @@ int footprintPoints(const scenes::Scene& scene, const TexelSet& texels, uint32_t
   for (int k = 0; k < 3; ++k) {
     const uint32_t v = prim.indices[first + size_t(k)];
     px[k] = glm::dvec2(prim.uv1[v]) * size;
-    q[k] = glm::dvec3(inst.transform * glm::vec4(prim.positions[v], 1.0f));
+    q[k] = glm::dvec3(inst.toWorld(prim.positions[v]));
   }
   const glm::dmat2 pixels(px[1] - px[0], px[2] - px[0]);
   if (!(std::abs(glm::determinant(pixels)) > 1e-12)) return 0;

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "afterglow/baker/raytracer.h"
+#include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
 #include "triangle_box.h"
 
@@ -24,41 +25,16 @@ constexpr float kTouch = 0.01f;                // a cell "touches" geometry this
 constexpr float kMove = 0.45f;                 // moves stay within this fraction of the cell
 constexpr float kMarginReach = 3.0f;           // hits within this × margin can be the nearest
 
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-// The static instances' world bounds (dynamic objects move; they neither shape nor refine the
-// probe grid).
-scenes::Bounds staticBounds(const scenes::Scene& scene) {
-  scenes::Bounds b;
-  for (const scenes::Instance& inst : scene.instances) {
-    if (!inst.isStatic || inst.mesh < 0 || size_t(inst.mesh) >= scene.meshes.size()) continue;
-    for (const scenes::Primitive& p : scene.meshes[size_t(inst.mesh)].primitives)
-      for (const glm::vec3& v : p.positions) {
-        const glm::vec3 w(inst.transform * glm::vec4(v, 1.0f));
-        if (finite(w)) b.extend(w);
-      }
-  }
-  return b;
-}
-
 using Triangle = std::array<glm::vec3, 3>;
 
 std::vector<Triangle> staticTriangles(const scenes::Scene& scene) {
   std::vector<Triangle> out;
   for (const scenes::Instance& inst : scene.instances) {
-    if (!inst.isStatic || inst.mesh < 0 || size_t(inst.mesh) >= scene.meshes.size()) continue;
-    for (const scenes::Primitive& p : scene.meshes[size_t(inst.mesh)].primitives)
-      for (size_t t = 0; t + 2 < p.indices.size(); t += 3) {
-        Triangle tri;
-        bool ok = true;
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t i = p.indices[t + size_t(k)];
-          if (i >= p.positions.size()) { ok = false; break; }
-          tri[size_t(k)] = glm::vec3(inst.transform * glm::vec4(p.positions[i], 1.0f));
-          ok = ok && finite(tri[size_t(k)]);
-        }
-        if (ok) out.push_back(tri);
-      }
+    if (!inst.isStatic) continue;
+    scenes::forEachWorldTriangle(scene, inst, [&](size_t, size_t, glm::vec3 a, glm::vec3 b,
+                                                  glm::vec3 c) {
+      if (finite(a) && finite(b) && finite(c)) out.push_back({a, b, c});
+    });
   }
   return out;
 }
@@ -188,7 +164,6 @@ class Prober {
   }
 
  private:
-  static constexpr float kPi = 3.14159265358979f;
   const scenes::Scene& scene_;
   const baker::RayTracer& tracer_;
   float insideFraction_;
@@ -422,7 +397,7 @@ Result<std::vector<Region>> makeRegions(const scenes::Scene& scene, const Placem
     regions.push_back(r);
   }
   if (regions.empty()) {
-    const scenes::Bounds b = staticBounds(scene);
+    const scenes::Bounds b = scene.staticBounds();
     if (b.empty()) return regions;
     Region r;
     r.spacing = spacingFor(0.0f);
@@ -509,7 +484,7 @@ float fittingSpacing(const scenes::Scene& scene, const PlacementOptions& options
 }  // namespace
 
 float autoSpacing(const scenes::Scene& scene) {
-  const scenes::Bounds b = staticBounds(scene);
+  const scenes::Bounds b = scene.staticBounds();
   if (b.empty()) return 1.0f;
   const glm::vec3 e = b.size();
   const float longest = std::max({e.x, e.y, e.z});

@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "afterglow/baker/raytracer.h"
+#include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/probes/placement.h"
 
@@ -14,7 +15,6 @@ namespace afterglow::probes {
 
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
 constexpr float kWallQuantile = 0.8f;    // as baker::fitReflectionProbeBox: walls behind furniture
 constexpr float kConeDegrees = 30.0f;    // rays counted toward an axis direction
 constexpr float kFitTolerance = 0.1f;    // a ray ends "on" its box within this × its exit distance
@@ -22,21 +22,6 @@ constexpr float kEnclosed = 0.5f;        // fewer rays on surfaces' fronts: not 
 constexpr float kThin = 0.5f;            // a box thinner than this × the spacing is a gap
 constexpr float kMostlyKept = 0.5f;      // a box this much inside kept boxes adds nothing
 constexpr float kCentreMargin = 0.05f;   // the capture point stays this × spacing off surfaces
-
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-scenes::Bounds staticBounds(const scenes::Scene& scene) {
-  scenes::Bounds b;
-  for (const scenes::Instance& inst : scene.instances) {
-    if (!inst.isStatic || inst.mesh < 0 || size_t(inst.mesh) >= scene.meshes.size()) continue;
-    for (const scenes::Primitive& p : scene.meshes[size_t(inst.mesh)].primitives)
-      for (const glm::vec3& v : p.positions) {
-        const glm::vec3 w(inst.transform * glm::vec4(v, 1.0f));
-        if (finite(w)) b.extend(w);
-      }
-  }
-  return b;
-}
 
 // A spherical Fibonacci set, turned off the axes (as the light probes' rays) so no ray runs
 // along an axis-aligned wall or through a row of columns exactly.
@@ -199,7 +184,7 @@ Result<ReflectionPlacement> placeReflectionProbes(const scenes::Scene& scene,
   if (options.maxProbes == 0)
     return Status::error("reflection probe placement: maxProbes must be at least 1");
   ReflectionPlacement out;
-  const scenes::Bounds bounds = staticBounds(scene);
+  const scenes::Bounds bounds = scene.staticBounds();
   if (bounds.empty()) {
     out.warnings.push_back("reflection probe placement: no static geometry, no proposals");
     return out;

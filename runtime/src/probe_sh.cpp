@@ -2,11 +2,11 @@
 
 #include <cmath>
 
+#include "afterglow/core/math.h"
+
 namespace afterglow::runtime {
 
 namespace {
-
-constexpr float kPi = 3.14159265358979323846f;
 
 // The basis functions' constants k_i (shBasis without the polynomials).
 constexpr float kBasisConstant[kShCount] = {

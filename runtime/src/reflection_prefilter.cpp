@@ -5,13 +5,12 @@
 #include <cstdint>
 #include <memory>
 
+#include "afterglow/core/math.h"
 #include "afterglow/runtime/prefilter_plan.h"
 
 namespace afterglow::runtime {
 
 namespace {
-
-constexpr float kPi = 3.14159265358979323846f;
 
 // Křivánek & Colbert's bias: read one level blurrier than the sample's footprint, which hides
 // the footprint's mismatch with the box filter of the mip chain (their "+1").

@@ -8,18 +8,12 @@
 #include <cmath>
 #include <limits>
 
+#include "afterglow/core/math.h"
+
 namespace afterglow::runtime {
 namespace {
 
 using glm::dvec3;
-
-bool finite(const glm::vec3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
-bool finite(const dvec3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
 
 // Whether the box takes part at all: positive half-sizes and finite values. A blend distance
 // may be +infinity (clamped to the half-size anyway) but not NaN.

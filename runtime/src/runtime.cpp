@@ -5,20 +5,14 @@
 #include <cmath>
 #include <cstring>
 
+#include "afterglow/core/math.h"
+#include "afterglow/core/timer.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/transport_file.h"
 
 namespace afterglow::runtime {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-bool finite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 const std::string& emptyString() {
   static const std::string empty;
@@ -311,11 +305,11 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
   double lastPassMs = 0.0;
   while (stats.bounces < limit) {
     if (options.timeBudgetMs > 0.0 && stats.bounces > 0 &&
-        msSince(start) + lastPassMs + lastOutputMs_ > options.timeBudgetMs)
+        millisecondsSince(start) + lastPassMs + lastOutputMs_ > options.timeBudgetMs)
       break;
     const Clock::time_point passStart = Clock::now();
     stats.change = solver_->iterate();
-    lastPassMs = msSince(passStart);
+    lastPassMs = millisecondsSince(passStart);
     ++stats.bounces;
     stats.converged = stats.change < options.tolerance;
     if (options.maxBounces == 0 && stats.converged) break;
@@ -335,16 +329,16 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
     std::lock_guard<std::mutex> lock(outputMutex_);
     front_ = back;
   }
-  lastOutputMs_ = msSince(outputStart);
+  lastOutputMs_ = millisecondsSince(outputStart);
   if (options.probes && !probeWork_.empty()) {
     const Clock::time_point probeStart = Clock::now();
     stats.probes = int(refreshProbes(0, probeWork_.size()));
     publishProbes();
-    stats.probeMilliseconds = msSince(probeStart);
+    stats.probeMilliseconds = millisecondsSince(probeStart);
   }
   if (dirty & kDirtySky) reflectionSkyStale_ = true;
   runReflectionUnits(options.reflectionPasses, options.timeBudgetMs, start, stats);
-  stats.milliseconds = msSince(start);
+  stats.milliseconds = millisecondsSince(start);
   return stats;
 }
 
@@ -379,17 +373,17 @@ UpdateStats Runtime::updateProbes(double budgetMs) {
     double lastBlockMs = 0.0;
     size_t done = 0;
     while (done < n) {
-      if (done > 0 && msSince(start) + lastBlockMs > budgetMs) break;
+      if (done > 0 && millisecondsSince(start) + lastBlockMs > budgetMs) break;
       const Clock::time_point blockStart = Clock::now();
       const size_t did = refreshProbes(probeCursor_, std::min(kProbeBlock, n - done));
-      lastBlockMs = msSince(blockStart);
+      lastBlockMs = millisecondsSince(blockStart);
       done += did;
       probeCursor_ = (probeCursor_ + did) % n;
     }
     stats.probes = int(done);
   }
   publishProbes();
-  stats.probeMilliseconds = stats.milliseconds = msSince(start);
+  stats.probeMilliseconds = stats.milliseconds = millisecondsSince(start);
   return stats;
 }
 

@@ -4,18 +4,11 @@
 #include <algorithm>
 #include <chrono>
 
+#include "afterglow/core/timer.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/runtime.h"
 
 namespace afterglow::runtime {
-
-namespace {
-
-double msSince(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-}  // namespace
 
 void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point callStart,
                                  UpdateStats& stats) {
@@ -47,7 +40,7 @@ void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point 
   for (; todo > 0; --todo) {
     // The call's budget: stop before a unit that would overrun it (the first always runs).
     if (budgetMs > 0.0 && stats.reflectionPasses > 0 &&
-        msSince(callStart) + lastUnitMs > budgetMs)
+        millisecondsSince(callStart) + lastUnitMs > budgetMs)
       break;
     const auto unitStart = std::chrono::steady_clock::now();
     const size_t pass = reflectionCursor_ / probes, probe = reflectionCursor_ % probes;
@@ -70,7 +63,7 @@ void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point 
     if (pass + 1 == reflectionPasses_.size()) published[probe] = 1;
     reflectionCursor_ = (reflectionCursor_ + 1) % units;
     ++stats.reflectionPasses;
-    lastUnitMs = msSince(unitStart);
+    lastUnitMs = millisecondsSince(unitStart);
   }
   // Publish the probes whose last pass ran (and the sky when it changed).
   std::vector<std::shared_ptr<const CubemapChain>> fresh(probes + 1);
@@ -82,7 +75,7 @@ void Runtime::runReflectionUnits(int passes, double budgetMs, Clock::time_point 
     for (size_t i = 0; i < fresh.size(); ++i)
       if (fresh[i]) reflectionOut_[i] = std::move(fresh[i]);
   }
-  stats.reflectionMilliseconds += msSince(start);
+  stats.reflectionMilliseconds += millisecondsSince(start);
 }
 
 UpdateStats Runtime::updateReflectionProbes(int passes, double budgetMs) {
@@ -90,7 +83,7 @@ UpdateStats Runtime::updateReflectionProbes(int passes, double budgetMs) {
   const auto start = std::chrono::steady_clock::now();
   UpdateStats stats;
   runReflectionUnits(passes, budgetMs, start, stats);
-  stats.milliseconds = msSince(start);
+  stats.milliseconds = millisecondsSince(start);
   return stats;
 }
 

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "afterglow/core/math.h"
+
 namespace afterglow::scenes {
 
 glm::vec2 TextureRef::transform(glm::vec2 uv) const {
@@ -76,7 +78,19 @@ Bounds Scene::bounds() const {
   for (const Instance& inst : instances) {
     if (inst.mesh < 0 || size_t(inst.mesh) >= meshes.size()) continue;
     for (const Primitive& p : meshes[size_t(inst.mesh)].primitives)
-      for (const glm::vec3& v : p.positions) b.extend(glm::vec3(inst.transform * glm::vec4(v, 1.0f)));
+      for (const glm::vec3& v : p.positions) b.extend(inst.toWorld(v));
+  }
+  return b;
+}
+
+Bounds Scene::staticBounds() const {
+  Bounds b;
+  for (const Instance& inst : instances) {
+    const Mesh* mesh = meshOf(inst);
+    if (!inst.isStatic || !mesh) continue;
+    for (const Primitive& p : mesh->primitives)
+      for (const glm::vec3& v : p.positions)
+        if (const glm::vec3 w = inst.toWorld(v); finite(w)) b.extend(w);
   }
   return b;
 }

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "afterglow/core/math.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/solver.h"
 #include "test_rng.h"
@@ -13,8 +14,6 @@
 namespace afterglow::runtime {
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
-constexpr float kPi = float(kPiD);
 
 glm::vec3 randomDirection(test::Rng& rng) {
   const float z = 1.0f - 2.0f * rng.unit();
@@ -83,18 +82,18 @@ TEST(ProbeSh, DirectionalLightMatchesTheClampedCosinesL2Series) {
   for (int k = 0; k < 4000; ++k) {
     const glm::vec3 n = randomDirection(rng);
     const double t = glm::dot(n, d);
-    const double expected = e0 / kPiD * clampedCosineL2(t);
+    const double expected = e0 / kPiDouble * clampedCosineL2(t);
     const float got = irradianceOverPi(sh, n).x;
     ASSERT_NEAR(got, expected, 2e-6 * e0) << "n·d = " << t;
-    maxError = std::max(maxError, std::abs(got - e0 / kPiD * std::max(0.0, t)));
+    maxError = std::max(maxError, std::abs(got - e0 / kPiDouble * std::max(0.0, t)));
   }
   // Facing the light: 1/4 + 1/2 + 5/16 = 17/16 of the exact E0/π.
-  EXPECT_NEAR(irradianceOverPi(sh, d).x, e0 / kPiD * 1.0625, 2e-6 * e0);
+  EXPECT_NEAR(irradianceOverPi(sh, d).x, e0 / kPiDouble * 1.0625, 2e-6 * e0);
   // The truncation's error against the exact clamped cosine, g(t) = 3/32 + t/2 + 15t²/32 −
   // max(0, t), peaks at grazing (t = 0): 3/32 · E0/π, about 9% of the peak.
-  EXPECT_LE(maxError, 3.0 / 32.0 * e0 / kPiD + 1e-5);
-  EXPECT_GE(maxError, 0.9 * 3.0 / 32.0 * e0 / kPiD);
-  EXPECT_NEAR(irradianceOverPi(sh, perpendicular(d)).x, 3.0 / 32.0 * e0 / kPiD, 2e-6 * e0);
+  EXPECT_LE(maxError, 3.0 / 32.0 * e0 / kPiDouble + 1e-5);
+  EXPECT_GE(maxError, 0.9 * 3.0 / 32.0 * e0 / kPiDouble);
+  EXPECT_NEAR(irradianceOverPi(sh, perpendicular(d)).x, 3.0 / 32.0 * e0 / kPiDouble, 2e-6 * e0);
 }
 
 // L(ω) = a + b·(ω·y): E(n) = aπ + b ∫ (ω·y) max(0, ω·n) dω = aπ + b (n·y) · 2π/3 (only the

@@ -26,7 +26,7 @@
 #include <unordered_map>
 
 #include "afterglow/core/parallel.h"
-#include "texel_raster.h"
+#include "afterglow/uv/texel_raster.h"
 
 namespace afterglow::uv {
 namespace {
@@ -196,7 +196,7 @@ void buildVariant(const PackChart& chart, const glm::mat2& rotation, int padding
     const glm::dvec2 a = glm::dvec2(q[t]) - glm::dvec2(lo) + margin;
     const glm::dvec2 b = glm::dvec2(q[t + 1]) - glm::dvec2(lo) + margin;
     const glm::dvec2 c = glm::dvec2(q[t + 2]) - glm::dvec2(lo) + margin;
-    detail::rasterizeTriangle(a, b, c, detail::kPackGrow, v.cols, v.rows,
+    rasterizeTriangle(a, b, c, kPackGrow, v.cols, v.rows,
                               [&](int x, int y) { v.raw.set(x, y); });
   }
   // Runs per row, and the horizontal dilation on the way.

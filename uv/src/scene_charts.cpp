@@ -4,7 +4,7 @@
 #include <cstring>
 #include <numeric>
 
-#include "texel_raster.h"
+#include "afterglow/uv/texel_raster.h"
 
 namespace afterglow::uv::detail {
 namespace {

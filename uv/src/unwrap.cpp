@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "afterglow/core/check.h"
+#include "afterglow/core/timer.h"
 #include "afterglow/core/parallel.h"
 
 namespace afterglow::uv {
@@ -19,12 +20,6 @@ using scenes::Instance;
 using scenes::Mesh;
 using scenes::Primitive;
 using scenes::Scene;
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 std::string sceneName(const Scene& scene) {
   return scene.sourcePath.empty() ? std::string("scene") : scene.sourcePath;
 }
@@ -526,18 +521,12 @@ float texelsPerUnitFor(const Scene& scene, double texels) {
   for (const Instance& inst : scene.instances) {
     if (!inst.isStatic || inst.mesh < 0 || size_t(inst.mesh) >= scene.meshes.size()) continue;
     const double scale = double(inst.lightmapScale) * double(inst.lightmapScale);
-    for (const Primitive& prim : scene.meshes[size_t(inst.mesh)].primitives)
-      for (size_t t = 0; t + 2 < prim.indices.size(); t += 3) {
-        const uint32_t i0 = prim.indices[t], i1 = prim.indices[t + 1], i2 = prim.indices[t + 2];
-        if (i0 >= prim.positions.size() || i1 >= prim.positions.size() ||
-            i2 >= prim.positions.size())
-          continue;
-        const glm::dvec3 a(inst.transform * glm::vec4(prim.positions[i0], 1.0f));
-        const glm::dvec3 b(inst.transform * glm::vec4(prim.positions[i1], 1.0f));
-        const glm::dvec3 c(inst.transform * glm::vec4(prim.positions[i2], 1.0f));
-        const double twice = glm::length(glm::cross(b - a, c - a));
-        if (std::isfinite(twice)) area += 0.5 * scale * twice;
-      }
+    scenes::forEachWorldTriangle(scene, inst, [&](size_t, size_t, glm::vec3 fa, glm::vec3 fb,
+                                                  glm::vec3 fc) {
+      const glm::dvec3 a(fa), b(fb), c(fc);
+      const double twice = glm::length(glm::cross(b - a, c - a));
+      if (std::isfinite(twice)) area += 0.5 * scale * twice;
+    });
   }
   if (!(area > 0.0) || !(texels > 0.0)) return 0.0f;
   return float(std::sqrt(texels / area));

@@ -66,7 +66,4 @@ Status writeTonemappedPng(const std::string& path, int width, int height,
 // non-zero mask entry, or all when the mask is empty) to 0.8 after the Reinhard curve.
 float autoExposure(const std::vector<glm::vec3>& pixels, const std::vector<uint8_t>& mask = {});
 
-// Peak resident memory of this process so far, bytes (getrusage).
-size_t peakMemoryBytes();
-
 }  // namespace afterglow::baker

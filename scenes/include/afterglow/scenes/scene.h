@@ -130,6 +130,9 @@ struct Instance {
   float lightmapScale = 1.0f;  // "lightmapScale": multiplies texelsPerUnit for this instance
   bool castShadows = true;     // "castShadows"
   LightmapLocation lightmap;
+
+  // A point of its mesh in world space.
+  glm::vec3 toWorld(glm::vec3 local) const { return glm::vec3(transform * glm::vec4(local, 1.0f)); }
 };
 
 enum class LightType { Directional, Point, Spot };
@@ -211,12 +214,43 @@ struct Scene {
 
   // The material of a primitive, or the glTF default material for -1.
   const Material& material(int index) const;
+  // The mesh an instance places, or null when its index is out of range.
+  const Mesh* meshOf(const Instance& instance) const {
+    return instance.mesh >= 0 && size_t(instance.mesh) < meshes.size()
+               ? &meshes[size_t(instance.mesh)] : nullptr;
+  }
   // World-space bounds over all instances.
   Bounds bounds() const;
+  // World-space bounds over the finite vertices of static instances (dynamic objects move: they
+  // shape neither probe grids nor reflection probes).
+  Bounds staticBounds() const;
   // Triangles over all instances (instanced meshes counted once per instance).
   size_t instancedTriangleCount() const;
   // Triangles over unique meshes.
   size_t meshTriangleCount() const;
 };
+
+// Calls fn(triangle, a, b, c) for each triangle of `prim` whose three indices are in range, with
+// its corners in world space through `instance` (finite or not: the caller decides).
+template <class Fn>
+void forEachWorldTriangle(const Instance& instance, const Primitive& prim, Fn&& fn) {
+  for (size_t k = 0; k + 2 < prim.indices.size(); k += 3) {
+    const uint32_t i0 = prim.indices[k], i1 = prim.indices[k + 1], i2 = prim.indices[k + 2];
+    if (i0 >= prim.positions.size() || i1 >= prim.positions.size() ||
+        i2 >= prim.positions.size())
+      continue;
+    fn(k / 3, instance.toWorld(prim.positions[i0]), instance.toWorld(prim.positions[i1]),
+       instance.toWorld(prim.positions[i2]));
+  }
+}
+// The same over every primitive of an instance: fn(primitive, triangle, a, b, c).
+template <class Fn>
+void forEachWorldTriangle(const Scene& scene, const Instance& instance, Fn&& fn) {
+  const Mesh* mesh = scene.meshOf(instance);
+  if (!mesh) return;
+  for (size_t p = 0; p < mesh->primitives.size(); ++p)
+    forEachWorldTriangle(instance, mesh->primitives[p],
+                         [&](size_t t, glm::vec3 a, glm::vec3 b, glm::vec3 c) { fn(p, t, a, b, c); });
+}
 
 }  // namespace afterglow::scenes

@@ -18,7 +18,7 @@
 
 #include <glm/glm.hpp>
 
-namespace afterglow::uv::detail {
+namespace afterglow::uv {
 
 constexpr double kPackGrow = 0.0;       // texels
 constexpr double kMetricsGrow = -2e-3;  // texels
@@ -63,4 +63,4 @@ void rasterizeTriangle(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec
       if (triangleTouchesTexel(a, b, c, x, y, grow)) visit(x, y);
 }
 
-}  // namespace afterglow::uv::detail
+}  // namespace afterglow::uv

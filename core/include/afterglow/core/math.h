@@ -1,0 +1,22 @@
+// The math basics every library shares, defined once: π and a finiteness test for GLM vectors.
+// Header-only and GLM-only, so the runtime (which links GLM alone) uses it too.
+#pragma once
+
+#include <cmath>
+
+#include <glm/glm.hpp>
+
+namespace afterglow {
+
+constexpr double kPiDouble = 3.14159265358979323846;
+constexpr float kPi = float(kPiDouble);
+
+// Whether every component of v is finite (no NaN, no infinity).
+template <glm::length_t N, class T, glm::qualifier Q>
+bool finite(const glm::vec<N, T, Q>& v) {
+  for (glm::length_t i = 0; i < N; ++i)
+    if (!std::isfinite(v[i])) return false;
+  return true;
+}
+
+}  // namespace afterglow
