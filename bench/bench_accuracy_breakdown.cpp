@@ -32,7 +32,7 @@
 
 #include "afterglow/baker/bake.h"
 #include "afterglow/baker/clusters.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/solver.h"
@@ -79,7 +79,7 @@ const char* const kGatherNames[4] = {"cluster", "texelD", "nearEx", "exact"};
 // E/π of the directional lights at a hit (unit albedo, bounceIntensity applied), with one hard
 // shadow ray each: what the reference's next-event estimate gives there on average, short of
 // the sun's soft edge. Other lights are left out (Sponza-sun has the sun alone).
-glm::dvec3 sunAt(const scenes::Scene& scene, const baker::RayTracer& tracer, const baker::Hit& hit) {
+glm::dvec3 sunAt(const scenes::Scene& scene, const trace::RayTracer& tracer, const trace::Hit& hit) {
   const glm::vec3 ng = hit.frontFace ? hit.geometricNormal : -hit.geometricNormal;
   glm::vec3 n = tracer.shadingNormal(hit) * (hit.frontFace ? 1.0f : -1.0f);
   if (glm::dot(n, ng) <= 0.0f) n = ng;
@@ -91,10 +91,10 @@ glm::dvec3 sunAt(const scenes::Scene& scene, const baker::RayTracer& tracer, con
     const glm::vec3 toLight = -glm::normalize(light.direction);
     const float cosTheta = glm::dot(n, toLight);
     if (cosTheta <= 0.0f || glm::dot(ng, toLight) <= 0.0f) continue;
-    baker::Ray shadow;
+    trace::Ray shadow;
     shadow.origin = p;
     shadow.direction = toLight;
-    shadow.mask = baker::kMaskShadowCasters;
+    shadow.mask = trace::kMaskShadowCasters;
     if (tracer.occluded(shadow)) continue;
     sum += glm::dvec3(light.color) *
            double(light.intensity * light.bounceIntensity * cosTheta / 3.14159265f);
@@ -118,7 +118,7 @@ struct ClassSum {
 
 }  // namespace
 
-void printIndirectBreakdown(const scenes::Scene& scene, const baker::RayTracer& tracer,
+void printIndirectBreakdown(const scenes::Scene& scene, const trace::RayTracer& tracer,
                             const baker::BakeResult& b, const baker::ReferenceTexels& ref,
                             int rays) {
   const baker::TexelSet& texels = b.texels;
@@ -150,10 +150,10 @@ void printIndirectBreakdown(const scenes::Scene& scene, const baker::RayTracer& 
     uint64_t rng = 0x5eed0000ull ^ (uint64_t(t) << 20);
     double inverse = 0.0;
     for (int k = 0; k < rays; ++k) {
-      baker::Ray ray;
+      trace::Ray ray;
       ray.origin = texels.position[t];
       ray.direction = gatherDirection(texels.normal[t], texels.geometricNormal[t], k, rays, rng);
-      const baker::Hit hit = tracer.intersect(ray);
+      const trace::Hit hit = tracer.intersect(ray);
       if (!hit.valid()) continue;
       inverse += 1.0 / std::max(double(hit.t), 1e-6);
       const scenes::Instance& inst = scene.instances[hit.instance];

@@ -2,7 +2,7 @@
 #pragma once
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/scenes/scene.h"
 
@@ -10,7 +10,7 @@ namespace afterglow::bench {
 
 // Prints the bake's indirect error against `ref` by class of texel, and the error of four
 // one-bounce final gathers of the bake's solution, each with `rays` rays per texel.
-void printIndirectBreakdown(const scenes::Scene& scene, const baker::RayTracer& tracer,
+void printIndirectBreakdown(const scenes::Scene& scene, const trace::RayTracer& tracer,
                             const baker::BakeResult& b, const baker::ReferenceTexels& ref,
                             int rays);
 

@@ -25,7 +25,7 @@
 #include <string>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/uv/unwrap.h"
@@ -167,13 +167,13 @@ int benchAccuracy(int argc, char** argv) {
               double(unwrapOptions.pack.texelsPerUnit), b.texels.size(), valid,
               b.transport.gatherPointCount, b.clusters.size(), b.transport.linkCount());
   std::printf("bake         %.3f s (", bakeSeconds);
-  for (const baker::StageTime& s : b.stages) std::printf(" %s %.3f", s.name.c_str(), s.seconds);
+  for (const baker::StageTime& s : b.stages) std::printf(" %s %.3f", baker::stageName(s.stage), s.seconds);
   std::printf(" )\n");
   std::printf("rays         %.2f M intersect, %.2f M occluded\n", double(b.raysIntersected) / 1e6,
               double(b.raysOccluded) / 1e6);
   if (spp <= 0) return 0;
 
-  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   if (!tracer) return fail(tracer.message());
   // The texels compared: a fixed pseudo-random 1 in `stride` of the atlas (by a hash of the
   // texel's index), those of them the bake kept. Not every stride-th valid texel: a bake that

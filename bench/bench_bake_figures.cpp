@@ -15,30 +15,30 @@
 #include <vector>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/memory.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/uv/unwrap.h"
 #include "bench_common.h"
-#include "../baker/src/emitters.h"
-#include "../baker/src/sampling.h"
+#include "shading/emitters.h"
+#include "shading/sampling.h"
 
 namespace afterglow::bench {
 
 namespace {
 
-double stageSeconds(const baker::BakeResult& r, std::initializer_list<const char*> names) {
+double stageSeconds(const baker::BakeResult& r, std::initializer_list<baker::Stage> stages) {
   double total = 0.0;
   for (const baker::StageTime& s : r.stages)
-    for (const char* n : names)
-      if (s.name == n) total += s.seconds;
+    for (baker::Stage stage : stages)
+      if (s.stage == stage) total += s.seconds;
   return total;
 }
 
 // Rays per second of bare Embree calls over `rays`, spread over every thread, for one pass.
-double rawThroughput(const baker::RayTracer& tracer, const std::vector<baker::Ray>& rays,
-                     baker::RayTracer::Query query) {
+double rawThroughput(const trace::RayTracer& tracer, const std::vector<trace::Ray>& rays,
+                     trace::RayTracer::Query query) {
   const size_t blocks = size_t(threadCount()) * 4;
   const auto start = Clock::now();
   parallelFor(blocks, [&](size_t b) {
@@ -51,7 +51,7 @@ double rawThroughput(const baker::RayTracer& tracer, const std::vector<baker::Ra
 // Gather-like rays (cosine-distributed from texels) and shadow-like rays (from texels toward
 // the first light, or toward points on the emissive surfaces) from every stride-th valid texel.
 void sampleRays(const scenes::Scene& scene, const baker::TexelSet& texels, size_t count,
-                std::vector<baker::Ray>& gather, std::vector<baker::Ray>& shadow) {
+                std::vector<trace::Ray>& gather, std::vector<trace::Ray>& shadow) {
   std::vector<uint32_t> valid;
   for (uint32_t t = 0; t < texels.size(); ++t)
     if (texels.valid[t]) valid.push_back(t);
@@ -64,14 +64,14 @@ void sampleRays(const scenes::Scene& scene, const baker::TexelSet& texels, size_
     const baker::sampling::Frame frame(texels.normal[t]);
     for (uint32_t s = 0; s < perTexel; ++s) {
       baker::sampling::Rng rng(baker::sampling::Stream::TexelLinks, t, s);
-      baker::Ray ray;
+      trace::Ray ray;
       ray.origin = texels.position[t];
       ray.direction = frame.toWorld(baker::sampling::cosineHemisphere(
           baker::sampling::stratified2(rng, s, perTexel)));
       gather.push_back(ray);
-      baker::Ray sray;
+      trace::Ray sray;
       sray.origin = texels.position[t];
-      sray.mask = baker::kMaskShadowCasters;
+      sray.mask = trace::kMaskShadowCasters;
       if (!scene.lights.empty() && scene.lights[0].type == scenes::LightType::Directional) {
         sray.direction = -glm::normalize(scene.lights[0].direction);
       } else if (!emitters.empty()) {
@@ -87,8 +87,9 @@ void sampleRays(const scenes::Scene& scene, const baker::TexelSet& texels, size_
   }
 }
 
-const std::initializer_list<const char*> kPrecompute = {"texels", "gather", "clusters", "links",
-                                                        "direct"};
+const std::initializer_list<baker::Stage> kPrecompute = {
+    baker::Stage::Texels, baker::Stage::Gather, baker::Stage::Clusters, baker::Stage::Links,
+    baker::Stage::Direct};
 
 // The precompute's rays per second (texels, gather, clusters, links, direct) against what bare
 // Embree calls take for the same number of rays of each kind. This machine's speed drifts by
@@ -111,15 +112,15 @@ class Throughput {
   bool add(const baker::BakeResult& baked) {
     bestPrecompute_ = std::min(bestPrecompute_, stageSeconds(baked, kPrecompute));
     if (!tracer_) {  // rays from the first bake's texels
-      Result<std::unique_ptr<baker::RayTracer>> built = baker::RayTracer::build(scene_);
+      Result<std::unique_ptr<trace::RayTracer>> built = trace::RayTracer::build(scene_);
       if (!built) return false;
       tracer_ = std::move(built.value());
       sampleRays(scene_, baked.texels, 1 << 21, gather_, shadow_);
     }
     rawIntersect_ = std::max(rawIntersect_,
-                             rawThroughput(*tracer_, gather_, baker::RayTracer::Query::Intersect));
+                             rawThroughput(*tracer_, gather_, trace::RayTracer::Query::Intersect));
     rawOccluded_ = std::max(rawOccluded_,
-                            rawThroughput(*tracer_, shadow_, baker::RayTracer::Query::Occluded));
+                            rawThroughput(*tracer_, shadow_, trace::RayTracer::Query::Occluded));
     ++runs_;
     return true;
   }
@@ -142,8 +143,8 @@ class Throughput {
 
  private:
   const scenes::Scene& scene_;
-  std::unique_ptr<baker::RayTracer> tracer_;
-  std::vector<baker::Ray> gather_, shadow_;
+  std::unique_ptr<trace::RayTracer> tracer_;
+  std::vector<trace::Ray> gather_, shadow_;
   double bestBake_ = 1e30, bestPrecompute_ = 1e30, rawIntersect_ = 0.0, rawOccluded_ = 0.0;
   int runs_ = 0;
 };
@@ -151,7 +152,7 @@ class Throughput {
 // Seconds per stage, and the rays of those that trace any (in millions).
 void printStages(const baker::BakeResult& r) {
   for (const baker::StageTime& s : r.stages) {
-    std::printf(" %s %.3f", s.name.c_str(), s.seconds);
+    std::printf(" %s %.3f", baker::stageName(s.stage), s.seconds);
     if (s.rays > 0) std::printf(" (%.2fM)", double(s.rays) / 1e6);
   }
 }
@@ -213,7 +214,7 @@ int cornell(int threads, bool quick) {
   }
 
   // The reference at a high sample count over every 32nd valid texel.
-  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   if (!tracer) return fail(tracer.message());
   std::vector<uint32_t> subset;
   for (uint32_t t = 0, k = 0; t < b.texels.size(); ++t)

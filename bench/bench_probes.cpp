@@ -10,7 +10,7 @@
 #include <string>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/probes/placement.h"
 #include "afterglow/probes/tetrahedralize.h"
@@ -52,7 +52,7 @@ int benchProbes(int argc, char** argv) {
 
   // Placement as `afterglow bake` does it by default: its own ray tracer, then the tetrahedra.
   auto t0 = Clock::now();
-  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   if (!tracer) return fail(tracer.message());
   const double tracerSeconds = secondsSince(t0);
   t0 = Clock::now();
@@ -75,8 +75,8 @@ int benchProbes(int argc, char** argv) {
   const baker::BakeResult& b = baked.value();
   double probeSeconds = 0.0, gatherRate = 0.0, probeRate = 0.0;
   for (const baker::StageTime& s : b.stages) {
-    if (s.name == "probes") probeSeconds = s.seconds, probeRate = double(s.rays) / s.seconds / 1e6;
-    if (s.name == "gather") gatherRate = double(s.rays) / s.seconds / 1e6;
+    if (s.stage == baker::Stage::Probes) probeSeconds = s.seconds, probeRate = double(s.rays) / s.seconds / 1e6;
+    if (s.stage == baker::Stage::Gather) gatherRate = double(s.rays) / s.seconds / 1e6;
   }
   const size_t count = placed->positions.size();
   const double placementTotal = tracerSeconds + placeSeconds + tetSeconds;

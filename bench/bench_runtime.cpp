@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/bake_output.h"
+#include "afterglow/bakefiles/write.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/runtime/transport_file.h"

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "afterglow/baker/raytracer.h"
-#include "afterglow/baker/render.h"
+#include "afterglow/trace/raytracer.h"
+#include "afterglow/preview/render.h"
 #include "bench_common.h"
 
 namespace afterglow::bench {
@@ -44,16 +44,16 @@ int benchViews(int argc, char** argv) {
   }
   Result<scenes::Scene> scene = loadBenchScene(scenePath, false);
   if (!scene) return fail(scene.message());
-  Result<baker::LightmapImage> a = baker::readLinearImage(pathA), b = baker::readLinearImage(pathB);
+  Result<bakefiles::LightmapImage> a = bakefiles::readLinearImage(pathA), b = bakefiles::readLinearImage(pathB);
   if (!a) return fail(a.message());
   if (!b) return fail(b.message());
   if (a->width != b->width || a->height != b->height)
     return fail("views: the pictures differ in size");
-  baker::View view;
-  if (look) view = baker::lookAtView(from, at, fovDeg * 3.14159265f / 180.0f);
-  else if (!scene->cameras.empty()) view = baker::cameraView(scene->cameras.front());
+  trace::View view;
+  if (look) view = trace::lookAtView(from, at, fovDeg * 3.14159265f / 180.0f);
+  else if (!scene->cameras.empty()) view = trace::cameraView(scene->cameras.front());
   else return fail("views: no --look-from/--look-at and no camera in the scene");
-  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene.value());
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene.value());
   if (!tracer) return fail(tracer.message());
 
   // The material each pixel's centre ray hits (-1: a miss), through the renderer's camera.
@@ -61,8 +61,8 @@ int benchViews(int argc, char** argv) {
   std::vector<int> material(size_t(w) * size_t(h), -1);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const baker::Ray ray = baker::cameraRay(view, w, h, float(x) + 0.5f, float(y) + 0.5f);
-      const baker::Hit hit = tracer.value()->intersect(ray);
+      const trace::Ray ray = trace::cameraRay(view, w, h, float(x) + 0.5f, float(y) + 0.5f);
+      const trace::Hit hit = tracer.value()->intersect(ray);
       if (!hit.valid()) continue;
       const scenes::Instance& inst = scene->instances[hit.instance];
       material[size_t(y) * size_t(w) + size_t(x)] =

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/uv/unwrap.h"
@@ -32,7 +32,7 @@ TEST(BakeAccuracy, CornellBoxDefaultBakeMatchesTheReferencePathTracer) {
   for (uint32_t t = 0, k = 0; t < b.texels.size(); ++t)
     if (b.texels.valid[t] && k++ % 32 == 0) subset.push_back(t);
   ASSERT_GT(subset.size(), 1000u);
-  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   ASSERT_TRUE(tracer) << tracer.message();
   ReferenceOptions high;
   high.samples = 32768;

@@ -22,9 +22,9 @@
 #include "afterglow/scenes/material_eval.h"
 #include "afterglow/scenes/procedural.h"
 #include "afterglow/uv/unwrap.h"
-#include "../baker/src/lightmap_post.h"
+#include "post/lightmap_post.h"
 #include "afterglow/runtime/transport.h"
-#include "../baker/src/sky_image.h"
+#include "afterglow/baker/sky.h"
 #include "bake_fixtures.h"
 #include "test_util.h"
 
@@ -353,7 +353,7 @@ TEST(Bake, StagesAreTimedAndCancellationStops) {
   const BakeResult r = bakeOrDie(scene, draftOptions());
   std::vector<std::string> names;
   for (const StageTime& s : r.stages) {
-    names.push_back(s.name);
+    names.push_back(stageName(s.stage));
     EXPECT_GE(s.seconds, 0.0);
   }
   for (const char* want : {"raytracer", "texels", "clusters", "links", "direct", "solve", "dilate"})

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "bake_fixtures.h"
 
@@ -42,7 +42,7 @@ class BakeContactLight : public testing::TestWithParam<float> {};
 TEST_P(BakeContactLight, ShadowedFaceBesideAThinShadowMatchesTheReference) {
   scenes::Scene scene = wallInTheSun(GetParam());
   unwrapAt(scene, 4.0f);
-  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   ASSERT_TRUE(tracer) << tracer.message();
 
   BakeOptions options;

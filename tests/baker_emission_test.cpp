@@ -16,14 +16,14 @@
 #include <gtest/gtest.h>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/scenes/material_eval.h"
 #include "afterglow/uv/unwrap.h"
-#include "../baker/src/path_tracer.h"
+#include "reference/path_tracer.h"
 #include "bake_fixtures.h"
-#include "../baker/src/sampling.h"
+#include "shading/sampling.h"
 
 namespace afterglow::baker {
 namespace {
@@ -147,7 +147,7 @@ double bakeAbsorbed(const scenes::Scene& scene, const BakeResult& b, int panelIn
 // The same from the reference path tracer: stratified points over every surface, both sides
 // of the panel, each estimating E/π with `paths` paths.
 double referenceAbsorbed(const LampRoom& room, int pointsPerMetre, int paths) {
-  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(room.scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(room.scene);
   EXPECT_TRUE(tracer) << tracer.message();
   if (!tracer) return 0.0;
   const PathTracer pt(room.scene, *tracer.value(), Environment(), 64);
@@ -257,7 +257,7 @@ TEST(DoubleSidedEmission, TheCeilingAboveALampPanelGetsTheLightOfItsBack) {
     double baked = 0.0;
     for (uint32_t t : above) baked += double(b.texelDirect[t].x + b.texelIndirect[t].x);
     baked /= double(above.size());
-    Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(room.scene);
+    Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(room.scene);
     ASSERT_TRUE(tracer) << tracer.message();
     ReferenceOptions high;
     high.samples = 2048;

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "bake_fixtures.h"
 
@@ -30,7 +30,7 @@ struct Errors {
 Errors bouncedLightErrors(const scenes::Scene& scene, const std::vector<const BakeResult*>& bakes,
                           const std::vector<uint32_t>& texels, int paths) {
   Errors out;
-  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   EXPECT_TRUE(tracer) << tracer.message();
   if (!tracer) return out;
   ReferenceOptions ro;

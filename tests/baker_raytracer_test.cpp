@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
 #include "test_util.h"
@@ -53,17 +53,17 @@ int addInstance(Scene& scene, int mesh, const glm::mat4& transform = glm::mat4(1
   return int(scene.instances.size()) - 1;
 }
 
-std::unique_ptr<RayTracer> buildOrDie(const Scene& scene, const RayTracerOptions& options = {}) {
-  auto result = RayTracer::build(scene, options);
+std::unique_ptr<trace::RayTracer> buildOrDie(const Scene& scene, const trace::RayTracerOptions& options = {}) {
+  auto result = trace::RayTracer::build(scene, options);
   EXPECT_TRUE(result.isOk()) << result.message();
   return result.isOk() ? std::move(result.value()) : nullptr;
 }
 
 // The tracer keeps reading the scene, so temporaries must not reach it.
-std::unique_ptr<RayTracer> buildOrDie(Scene&& scene, const RayTracerOptions& options = {}) = delete;
+std::unique_ptr<trace::RayTracer> buildOrDie(Scene&& scene, const trace::RayTracerOptions& options = {}) = delete;
 
-Ray down(float x, float z, float fromY = 2.0f, uint32_t mask = kMaskAll) {
-  Ray r;
+trace::Ray down(float x, float z, float fromY = 2.0f, uint32_t mask = trace::kMaskAll) {
+  trace::Ray r;
   r.origin = glm::vec3(x, fromY, z);
   r.direction = glm::vec3(0.0f, -1.0f, 0.0f);
   r.mask = mask;
@@ -97,7 +97,7 @@ TEST(BakerRayTracer, FloorHitFromAboveIsExactAndFrontFacing) {
   EXPECT_EQ(tracer->stats().geometries, 1u);
   EXPECT_EQ(tracer->stats().triangles, 2u);
 
-  const Hit hit = tracer->intersect(down(0.25f, 0.75f));
+  const trace::Hit hit = tracer->intersect(down(0.25f, 0.75f));
   ASSERT_TRUE(hit.valid());
   EXPECT_FLOAT_EQ(hit.t, 2.0f);
   EXPECT_EQ(hit.instance, 0u);
@@ -113,20 +113,20 @@ TEST(BakerRayTracer, FloorHitFromAboveIsExactAndFrontFacing) {
   EXPECT_EQ(tracer->uv(hit, 1), glm::vec2(0.0f));  // no TEXCOORD_1
   EXPECT_NEAR(tracer->triangleArea(hit), 0.5f, 1e-6f);
 
-  const Hit other = tracer->intersect(down(0.75f, 0.25f));
+  const trace::Hit other = tracer->intersect(down(0.75f, 0.25f));
   ASSERT_TRUE(other.valid());
   EXPECT_EQ(other.triangle, 1u);  // z ≤ x
 
   // Beside the quad, and a segment that ends just above it: misses.
   EXPECT_FALSE(tracer->intersect(down(1.5f, 0.5f)).valid());
-  Ray shortRay = down(0.5f, 0.5f);
+  trace::Ray shortRay = down(0.5f, 0.5f);
   shortRay.tfar = 1.999f;
   EXPECT_FALSE(tracer->intersect(shortRay).valid());
   EXPECT_FALSE(tracer->occluded(shortRay));
   shortRay.tfar = 2.001f;
   EXPECT_TRUE(tracer->occluded(shortRay));
   // tnear past the quad: the segment starts below it.
-  Ray late = down(0.5f, 0.5f);
+  trace::Ray late = down(0.5f, 0.5f);
   late.tnear = 2.5f;
   EXPECT_FALSE(tracer->intersect(late).valid());
 }
@@ -142,16 +142,16 @@ TEST(BakerRayTracer, LightmapUvsPerTriangleMatchTheVertexUvs) {
   addInstance(scene, addMesh(scene, {quad}), glm::translate(glm::mat4(1.0f), {4.0f, 0.0f, 0.0f}));
   auto tracer = buildOrDie(scene);
   ASSERT_TRUE(tracer);
-  const Hit bare = tracer->intersect(down(0.25f, 0.75f));
+  const trace::Hit bare = tracer->intersect(down(0.25f, 0.75f));
   ASSERT_TRUE(bare.valid());
   EXPECT_EQ(tracer->lightmapUvs(bare), nullptr);
-  EXPECT_EQ(tracer->lightmapUvs(Hit{}), nullptr);
+  EXPECT_EQ(tracer->lightmapUvs(trace::Hit{}), nullptr);
   for (glm::vec2 p : {glm::vec2(4.25f, 0.75f), glm::vec2(4.8f, 0.1f), glm::vec2(4.5f, 0.5f)}) {
-    const Hit hit = tracer->intersect(down(p.x, p.y));
+    const trace::Hit hit = tracer->intersect(down(p.x, p.y));
     ASSERT_TRUE(hit.valid());
     const glm::vec2* corners = tracer->lightmapUvs(hit);
     ASSERT_NE(corners, nullptr);
-    const glm::vec2 uv = RayTracer::mixCorners(corners, hit);
+    const glm::vec2 uv = trace::RayTracer::mixCorners(corners, hit);
     EXPECT_EQ(uv, tracer->uv(hit, 1));
     // The quad's uv0 is its (x, z) in [0, 1]; uv1 swaps them, halves them and adds 0.1.
     EXPECT_NEAR(uv.x, 0.1f + 0.5f * (p.y), 1e-6f);
@@ -164,10 +164,10 @@ TEST(BakerRayTracer, FloorHitFromBelowIsBackFace) {
   addInstance(scene, addMesh(scene, {floorQuad()}));
   auto tracer = buildOrDie(scene);
   ASSERT_TRUE(tracer);
-  Ray up;
+  trace::Ray up;
   up.origin = glm::vec3(0.25f, -3.0f, 0.75f);
   up.direction = glm::vec3(0.0f, 1.0f, 0.0f);
-  const Hit hit = tracer->intersect(up);
+  const trace::Hit hit = tracer->intersect(up);
   ASSERT_TRUE(hit.valid());
   EXPECT_FLOAT_EQ(hit.t, 3.0f);
   EXPECT_FALSE(hit.frontFace);
@@ -185,10 +185,10 @@ TEST(BakerRayTracer, GeometricNormalFollowsCounterClockwiseWinding) {
   addInstance(scene, addMesh(scene, {wall}));
   auto tracer = buildOrDie(scene);
   ASSERT_TRUE(tracer);
-  Ray r;
+  trace::Ray r;
   r.origin = glm::vec3(0.3f, 0.6f, 5.0f);
   r.direction = glm::vec3(0.0f, 0.0f, -2.0f);  // not unit: t counts multiples of it
-  const Hit hit = tracer->intersect(r);
+  const trace::Hit hit = tracer->intersect(r);
   ASSERT_TRUE(hit.valid());
   EXPECT_FLOAT_EQ(hit.t, 2.5f);
   EXPECT_TRUE(hit.frontFace);
@@ -214,7 +214,7 @@ TEST(BakerRayTracer, InstanceAndPrimitiveIdsWithTwoInstancesOfOneMesh) {
   const Case cases[] = {{0.2f, 0.8f, 0, 0, 0}, {0.8f, 0.2f, 0, 0, 1}, {2.2f, 0.8f, 0, 1, 0},
                         {2.8f, 0.2f, 0, 1, 1}, {0.2f, 5.8f, 1, 0, 0}, {2.8f, 5.2f, 1, 1, 1}};
   for (const Case& c : cases) {
-    const Hit hit = tracer->intersect(down(c.x, c.z));
+    const trace::Hit hit = tracer->intersect(down(c.x, c.z));
     ASSERT_TRUE(hit.valid()) << c.x << "," << c.z;
     EXPECT_EQ(hit.instance, c.instance);
     EXPECT_EQ(hit.primitive, c.primitive);
@@ -223,8 +223,8 @@ TEST(BakerRayTracer, InstanceAndPrimitiveIdsWithTwoInstancesOfOneMesh) {
     EXPECT_FLOAT_EQ(hit.t, c.instance == 1 ? 1.5f : 2.0f);
   }
   // The same object-space point on both instances lands `shift` apart in the world.
-  const Hit a = tracer->intersect(down(2.3f, 0.4f));
-  const Hit b = tracer->intersect(down(2.3f + shift.x, 0.4f + shift.z));
+  const trace::Hit a = tracer->intersect(down(2.3f, 0.4f));
+  const trace::Hit b = tracer->intersect(down(2.3f + shift.x, 0.4f + shift.z));
   ASSERT_TRUE(a.valid() && b.valid());
   EXPECT_EQ(a.primitive, b.primitive);
   EXPECT_EQ(a.triangle, b.triangle);
@@ -249,14 +249,14 @@ TEST(BakerRayTracer, MirroredInstancesKeepGltfFrontFace) {
   auto tracer = buildOrDie(scene);
   ASSERT_TRUE(tracer);
 
-  const Hit mx = tracer->intersect(down(4.5f, 0.5f));  // x ∈ [4, 5]
+  const trace::Hit mx = tracer->intersect(down(4.5f, 0.5f));  // x ∈ [4, 5]
   ASSERT_TRUE(mx.valid());
   EXPECT_EQ(mx.instance, 0u);
   EXPECT_TRUE(mx.frontFace);
   expectVec3Near(mx.geometricNormal, {0.0f, 1.0f, 0.0f}, 1e-6f);
   expectVec3Near(tracer->shadingNormal(mx), {0.0f, 1.0f, 0.0f}, 1e-6f);
 
-  const Hit my = tracer->intersect(down(10.5f, 0.5f));
+  const trace::Hit my = tracer->intersect(down(10.5f, 0.5f));
   ASSERT_TRUE(my.valid());
   EXPECT_EQ(my.instance, 1u);
   EXPECT_FALSE(my.frontFace);
@@ -273,21 +273,21 @@ TEST(BakerRayTracer, NonCastingInstanceIsSkippedByShadowRaysOnly) {
   auto tracer = buildOrDie(scene);
   ASSERT_TRUE(tracer);
 
-  const Hit camera = tracer->intersect(down(0.5f, 0.3f));
+  const trace::Hit camera = tracer->intersect(down(0.5f, 0.3f));
   ASSERT_TRUE(camera.valid());
   EXPECT_EQ(camera.instance, 0u);
   EXPECT_FLOAT_EQ(camera.t, 1.0f);
 
-  const Hit shadow = tracer->intersect(down(0.5f, 0.3f, 2.0f, kMaskShadowCasters));
+  const trace::Hit shadow = tracer->intersect(down(0.5f, 0.3f, 2.0f, trace::kMaskShadowCasters));
   ASSERT_TRUE(shadow.valid());
   EXPECT_EQ(shadow.instance, 1u);
   EXPECT_FLOAT_EQ(shadow.t, 2.0f);
 
   // A shadow ray that ends between the two quads is not blocked; a camera ray is.
-  Ray between = down(0.5f, 0.3f, 2.0f, kMaskShadowCasters);
+  trace::Ray between = down(0.5f, 0.3f, 2.0f, trace::kMaskShadowCasters);
   between.tfar = 1.5f;
   EXPECT_FALSE(tracer->occluded(between));
-  between.mask = kMaskAll;
+  between.mask = trace::kMaskAll;
   EXPECT_TRUE(tracer->occluded(between));
 }
 
@@ -321,25 +321,25 @@ TEST(BakerRayTracer, AlphaMaskLetsRaysThroughTransparentHalfOnly) {
   // u = 0.25 samples the transparent texel's centre, u = 0.75 the opaque one's, on both
   // triangles of the quad.
   for (float z : {0.1f, 0.9f}) {
-    const Hit through = tracer->intersect(down(0.25f, z));
+    const trace::Hit through = tracer->intersect(down(0.25f, z));
     ASSERT_TRUE(through.valid());
     EXPECT_EQ(through.instance, 1u);
     EXPECT_FLOAT_EQ(through.t, 3.0f);
-    const Hit stopped = tracer->intersect(down(0.75f, z));
+    const trace::Hit stopped = tracer->intersect(down(0.75f, z));
     ASSERT_TRUE(stopped.valid());
     EXPECT_EQ(stopped.instance, 0u);
     EXPECT_EQ(tracer->material(stopped).name, "cutout");
     EXPECT_EQ(tracer->material(through).name, "default");
     EXPECT_FLOAT_EQ(stopped.t, 2.0f);
 
-    Ray shadow = down(0.25f, z);
+    trace::Ray shadow = down(0.25f, z);
     shadow.tfar = 2.5f;  // ends between the cut-out quad and the floor
     EXPECT_FALSE(tracer->occluded(shadow));
     shadow.origin.x = 0.75f;
     EXPECT_TRUE(tracer->occluded(shadow));
   }
   // The same scene with alpha testing off, or as OPAQUE, blocks everywhere.
-  RayTracerOptions noAlpha;
+  trace::RayTracerOptions noAlpha;
   noAlpha.alphaTest = false;
   auto opaque = buildOrDie(scene, noAlpha);
   ASSERT_TRUE(opaque);
@@ -348,7 +348,7 @@ TEST(BakerRayTracer, AlphaMaskLetsRaysThroughTransparentHalfOnly) {
   auto blend = buildOrDie(blendScene);
   ASSERT_TRUE(blend);
   EXPECT_EQ(blend->intersect(down(0.25f, 0.5f)).instance, 0u);
-  RayTracerOptions blendCut;
+  trace::RayTracerOptions blendCut;
   blendCut.blendAsMask = true;
   auto cut = buildOrDie(blendScene, blendCut);
   ASSERT_TRUE(cut);
@@ -399,7 +399,7 @@ TEST(BakerRayTracer, BrokenTrianglesAndRaysDoNotCrash) {
   ASSERT_TRUE(tracer);
   EXPECT_EQ(tracer->stats().invalidTriangles, 2u);
   EXPECT_EQ(tracer->stats().skippedInstances, 1u);
-  const Hit hit = tracer->intersect(down(0.25f, 0.75f));
+  const trace::Hit hit = tracer->intersect(down(0.25f, 0.75f));
   ASSERT_TRUE(hit.valid());
   EXPECT_EQ(hit.triangle, 0u);
   expectVec3Near(tracer->position(hit), {0.25f, 0.0f, 0.75f}, 1e-6f);
@@ -408,15 +408,15 @@ TEST(BakerRayTracer, BrokenTrianglesAndRaysDoNotCrash) {
   EXPECT_NEAR(b.min.x, 0.0f, 1e-6f);
   EXPECT_NEAR(b.max.x, 1.0f, 1e-6f);
 
-  Ray bad = down(0.5f, 0.5f);
+  trace::Ray bad = down(0.5f, 0.5f);
   bad.direction.x = nan;
   EXPECT_FALSE(tracer->intersect(bad).valid());
   EXPECT_FALSE(tracer->occluded(bad));
-  Ray inverted = down(0.5f, 0.5f);
+  trace::Ray inverted = down(0.5f, 0.5f);
   inverted.tnear = 3.0f;
   inverted.tfar = 1.0f;
   EXPECT_FALSE(tracer->intersect(inverted).valid());
-  Ray zero = down(0.5f, 0.5f);
+  trace::Ray zero = down(0.5f, 0.5f);
   zero.direction = glm::vec3(0.0f);
   EXPECT_FALSE(tracer->occluded(zero));
 
@@ -428,11 +428,11 @@ TEST(BakerRayTracer, BrokenTrianglesAndRaysDoNotCrash) {
 }
 
 // Random segments inside the Cornell box.
-std::vector<Ray> cornellRays(size_t n, uint32_t seed) {
+std::vector<trace::Ray> cornellRays(size_t n, uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  std::vector<Ray> rays(n);
-  for (Ray& r : rays) {
+  std::vector<trace::Ray> rays(n);
+  for (trace::Ray& r : rays) {
     r.origin = glm::vec3(0.05f + 0.45f * unit(rng), 0.05f + 0.45f * unit(rng),
                          0.05f + 0.45f * unit(rng));
     r.direction = glm::normalize(glm::vec3(unit(rng), unit(rng), unit(rng)) - 0.5f);
@@ -445,8 +445,8 @@ TEST(BakerRayTracer, OccludedAgreesWithIntersect) {
   const Scene scene = scenes::makeCornellBox();
   auto tracer = buildOrDie(scene);
   ASSERT_TRUE(tracer);
-  const std::vector<Ray> rays = cornellRays(5000, 7);
-  std::vector<Hit> hits(rays.size());
+  const std::vector<trace::Ray> rays = cornellRays(5000, 7);
+  std::vector<trace::Hit> hits(rays.size());
   bool blocked[5000];
   tracer->intersect(rays.data(), hits.data(), rays.size());
   tracer->occluded(rays.data(), blocked, rays.size());
@@ -454,7 +454,7 @@ TEST(BakerRayTracer, OccludedAgreesWithIntersect) {
   for (size_t i = 0; i < rays.size(); ++i) {
     ASSERT_EQ(hits[i].valid(), blocked[i]) << "ray " << i;
     ASSERT_EQ(tracer->occluded(rays[i]), blocked[i]) << "ray " << i;
-    const Hit single = tracer->intersect(rays[i]);
+    const trace::Hit single = tracer->intersect(rays[i]);
     ASSERT_EQ(single.valid(), hits[i].valid());
     if (single.valid()) {
       ASSERT_EQ(single.t, hits[i].t);
@@ -472,13 +472,13 @@ TEST(BakerRayTracer, TwoThreadsGiveTheSameHitsAsOneAndCountRays) {
   auto tracer = buildOrDie(scene);
   ASSERT_TRUE(tracer);
   const size_t n = 20000;
-  std::vector<Ray> rays = cornellRays(n, 11);
-  for (Ray& r : rays) r.tfar = std::numeric_limits<float>::infinity();
+  std::vector<trace::Ray> rays = cornellRays(n, 11);
+  for (trace::Ray& r : rays) r.tfar = std::numeric_limits<float>::infinity();
   tracer->resetRayCount();
-  std::vector<Hit> serial(n);
+  std::vector<trace::Hit> serial(n);
   tracer->intersect(rays.data(), serial.data(), n);
 
-  std::vector<Hit> parallel(n);
+  std::vector<trace::Hit> parallel(n);
   auto work = [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) parallel[i] = tracer->intersect(rays[i]);
   };
@@ -502,10 +502,10 @@ TEST(BakerRayTracer, FurnaceBoxEveryRayFromInsideHitsAFrontFace) {
   ASSERT_TRUE(tracer);
   const glm::vec3 centre(0.0f);  // the box is centred on the origin
   for (const glm::vec3& d : sphereDirections(1000)) {
-    Ray r;
+    trace::Ray r;
     r.origin = centre;
     r.direction = d;
-    const Hit hit = tracer->intersect(r);
+    const trace::Hit hit = tracer->intersect(r);
     ASSERT_TRUE(hit.valid()) << d.x << "," << d.y << "," << d.z;
     EXPECT_TRUE(hit.frontFace);
     // The wall hit is the one along the direction's largest component, 1 m away.
@@ -541,10 +541,10 @@ TEST(BakerRayTracer, RaysAimedAtSharedEdgesAndVerticesDoNotLeak) {
             target[axis] = side;
             target[(axis + 1) % 3] = -1.0f + 0.25f * float(i);
             target[(axis + 2) % 3] = -1.0f + 0.25f * float(j);
-            Ray r;
+            trace::Ray r;
             r.origin = origin;
             r.direction = target - origin;  // t = 1 at the target
-            const Hit hit = tracer->intersect(r);
+            const trace::Hit hit = tracer->intersect(r);
             ++rays;
             ASSERT_TRUE(hit.valid()) << "leak towards " << target.x << "," << target.y << ","
                                      << target.z << " from " << origin.x << "," << origin.y;
@@ -562,10 +562,10 @@ TEST(BakerRayTracer, CornellBoxRaysFromTheCentreMissOnlyThroughTheOpenFront) {
   const glm::vec3 centre(0.278f, 0.2744f, 0.2796f);
 
   // Straight up from the centre: the lamp, 1 mm under the ceiling.
-  Ray up;
+  trace::Ray up;
   up.origin = centre;
   up.direction = glm::vec3(0.0f, 1.0f, 0.0f);
-  const Hit lamp = tracer->intersect(up);
+  const trace::Hit lamp = tracer->intersect(up);
   ASSERT_TRUE(lamp.valid());
   EXPECT_EQ(scene.instances[lamp.instance].name, "light");
   EXPECT_NEAR(lamp.t, 0.5478f - 0.2744f, 1e-6f);
@@ -573,10 +573,10 @@ TEST(BakerRayTracer, CornellBoxRaysFromTheCentreMissOnlyThroughTheOpenFront) {
 
   int misses = 0;
   for (const glm::vec3& d : sphereDirections(1000)) {
-    Ray r;
+    trace::Ray r;
     r.origin = centre;
     r.direction = d;
-    const Hit hit = tracer->intersect(r);
+    const trace::Hit hit = tracer->intersect(r);
     // Where the ray crosses the plane of the opening z = 0, if it goes that way.
     bool throughOpening = false, clearlyInside = false;
     if (d.z < 0.0f) {
@@ -628,7 +628,7 @@ TEST(BakerRayTracer, SponzaBuildsAllInstancedTrianglesWithCutouts) {
   const glm::vec3 centre = 0.5f * (b.min + b.max);
   int hits = 0;
   for (int i = 0; i < 360; ++i) {
-    Ray r;
+    trace::Ray r;
     r.origin = glm::vec3(centre.x, b.min.y + 0.2f * (b.max.y - b.min.y), centre.z);
     r.direction = glm::vec3(std::cos(0.01745f * float(i)), 0.0f, std::sin(0.01745f * float(i)));
     hits += tracer->intersect(r).valid() ? 1 : 0;

@@ -10,13 +10,13 @@
 
 #include <gtest/gtest.h>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/transport.h"
 #include "afterglow/scenes/procedural.h"
 #include "afterglow/uv/unwrap.h"
-#include "../baker/src/lightmap_post.h"
-#include "../baker/src/seams.h"
+#include "post/lightmap_post.h"
+#include "post/seams.h"
 
 namespace afterglow::baker {
 namespace {
@@ -284,7 +284,7 @@ TexelSet unwrappedTexels(scenes::Scene& scene, float texelsPerUnit) {
   options.pack.texelsPerUnit = texelsPerUnit;
   const Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, options);
   EXPECT_TRUE(unwrapped) << unwrapped.message();
-  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   EXPECT_TRUE(tracer) << tracer.message();
   if (!unwrapped || !tracer) return {};
   Result<TexelSet> texels = computeTexels(scene, *tracer.value());

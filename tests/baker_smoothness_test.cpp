@@ -26,7 +26,7 @@
 #include <gtest/gtest.h>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/uv/unwrap.h"
@@ -175,7 +175,7 @@ TEST(BakeSmoothness, CornellWallsBouncedLightHasNoBlotchesBeyondTheReference) {
   // still one sub-grid cell), at 8192 paths: its noise in the band is about 0.55% of the mean.
   constexpr int kStep = 2;
   constexpr double kFine = 2.0, kCoarse = 12.0;  // texels
-  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   ASSERT_TRUE(tracer) << tracer.message();
   for (const char* wall : {"backWall", "ceiling"}) {
     SCOPED_TRACE(wall);

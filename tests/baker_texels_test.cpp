@@ -14,13 +14,15 @@
 #include <gtest/gtest.h>
 
 #include "afterglow/baker/clusters.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/direct.h"
+#include "afterglow/baker/gather.h"
+#include "afterglow/baker/links.h"
 #include "afterglow/baker/texels.h"
-#include "afterglow/baker/transport_precompute.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/material_eval.h"
 #include "afterglow/scenes/procedural.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/uv/unwrap.h"
 #include "afterglow/uv/texel_raster.h"
 #include "bake_fixtures.h"
@@ -40,13 +42,13 @@ Scene unwrapped(Scene scene, float texelsPerUnit) {
   return scene;
 }
 
-std::unique_ptr<RayTracer> buildOrDie(const Scene& scene) {
-  auto result = RayTracer::build(scene);
+std::unique_ptr<trace::RayTracer> buildOrDie(const Scene& scene) {
+  auto result = trace::RayTracer::build(scene);
   EXPECT_TRUE(result.isOk()) << result.message();
   return result.isOk() ? std::move(result.value()) : nullptr;
 }
 
-TexelSet texelsOrDie(const Scene& scene, const RayTracer& tracer, const TexelOptions& options = {}) {
+TexelSet texelsOrDie(const Scene& scene, const trace::RayTracer& tracer, const TexelOptions& options = {}) {
   Result<TexelSet> r = computeTexels(scene, tracer, options);
   EXPECT_TRUE(r.isOk()) << r.message();
   return r.isOk() ? std::move(r.value()) : TexelSet{};
@@ -194,7 +196,7 @@ TEST(BakerTexels, PartialTexelsStayOnTheTriangle) {
 
 struct Cornell {
   Scene scene;
-  std::unique_ptr<RayTracer> tracer;
+  std::unique_ptr<trace::RayTracer> tracer;
   TexelSet texels;
 };
 
@@ -310,11 +312,11 @@ TEST(BakerTexels, TexelAtRoundTrips) {
   for (uint32_t t = 0; t < texels.size(); ++t) {
     if (!texels.valid[t]) continue;
     ++valid;
-    Ray ray;
+    trace::Ray ray;
     ray.origin = texels.position[t] + 1e-3f * texels.geometricNormal[t];
     ray.direction = -texels.geometricNormal[t];
     ray.tfar = 2e-2f;
-    const Hit hit = c.tracer->intersect(ray);
+    const trace::Hit hit = c.tracer->intersect(ray);
     // Samples pushed out next to a block no longer sit above their own texel.
     if (!hit.valid() || hit.instance != texels.instance[t]) continue;
     if (int(texels.instance[t]) == floor && (depthInside(blocks[0], texels.position[t]) > -2.0f / 64.0f ||

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "../baker/src/sampling.h"
+#include "shading/sampling.h"
 
 namespace afterglow::baker {
 namespace {

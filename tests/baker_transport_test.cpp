@@ -9,12 +9,15 @@
 
 #include <gtest/gtest.h>
 
-#include "afterglow/baker/raytracer.h"
-#include "afterglow/baker/transport_precompute.h"
+#include "afterglow/baker/direct.h"
+#include "afterglow/baker/gather.h"
+#include "afterglow/baker/links.h"
+#include "afterglow/baker/probe_transfer.h"
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/scenes/procedural.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/uv/unwrap.h"
 
 namespace afterglow::baker {
@@ -132,8 +135,8 @@ struct Builder {
     }
   }
 
-  std::unique_ptr<RayTracer> tracer() const {
-    auto result = RayTracer::build(scene);
+  std::unique_ptr<trace::RayTracer> tracer() const {
+    auto result = trace::RayTracer::build(scene);
     EXPECT_TRUE(result.isOk()) << result.message();
     return result.isOk() ? std::move(result.value()) : nullptr;
   }
@@ -142,7 +145,7 @@ struct Builder {
 // The texels' gather, then the links from it (what bake() does between them, clustering, is
 // done by hand in these tests).
 // The gather's point of each texel comes back through `pointOfTexel` when asked for.
-Status gatherAndLink(const Scene& scene, const RayTracer& tracer, TexelSet& texels,
+Status gatherAndLink(const Scene& scene, const trace::RayTracer& tracer, TexelSet& texels,
                      const Clusters& clusters, const LinkOptions& options,
                      runtime::TransportData& data, std::vector<uint32_t>* pointOfTexel = nullptr,
                      const std::vector<Clusters>& farLevels = {}) {
@@ -448,7 +451,7 @@ void expectFurnaceRadiance(runtime::TransportData& data, const std::vector<uint8
 // and texels. (The tracer refers to the scene, so the box stays where it was built.)
 struct FurnaceBox {
   Scene scene;
-  std::unique_ptr<RayTracer> tracer;
+  std::unique_ptr<trace::RayTracer> tracer;
   TexelSet texels;
 };
 
@@ -461,7 +464,7 @@ void buildFurnaceBox(FurnaceBox& box) {
   uv::UnwrapOptions uopt;
   uopt.pack.texelsPerUnit = 16.0f;
   ASSERT_TRUE(uv::unwrap(box.scene, uopt).isOk());
-  auto built = RayTracer::build(box.scene);
+  auto built = trace::RayTracer::build(box.scene);
   ASSERT_TRUE(built.isOk()) << built.message();
   box.tracer = std::move(built.value());
   Result<TexelSet> texels = computeTexels(box.scene, *box.tracer);
@@ -547,7 +550,7 @@ TEST(BakerTransport, WhiteFurnaceThroughTexelsAndClusters) {
   FurnaceBox box;
   ASSERT_NO_FATAL_FAILURE(buildFurnaceBox(box));
   const Scene& scene = box.scene;
-  const RayTracer& tracer = *box.tracer;
+  const trace::RayTracer& tracer = *box.tracer;
   TexelSet& texels = box.texels;
   const Clusters clusters = computeClusters(scene, &tracer, texels);
   ASSERT_GT(texels.size(), 1000u);
@@ -696,9 +699,9 @@ TEST(BakerTransport, CornellLampOnTheFloorMatchesQuadrature) {
   uv::UnwrapOptions uopt;
   uopt.pack.texelsPerUnit = 48.0f;
   ASSERT_TRUE(uv::unwrap(scene, uopt).isOk());
-  auto built = RayTracer::build(scene);
+  auto built = trace::RayTracer::build(scene);
   ASSERT_TRUE(built.isOk()) << built.message();
-  const RayTracer& tracer = *built.value();
+  const trace::RayTracer& tracer = *built.value();
   Result<TexelSet> texelResult = computeTexels(scene, tracer);
   ASSERT_TRUE(texelResult.isOk()) << texelResult.message();
   TexelSet texels = std::move(texelResult.value());
@@ -751,7 +754,7 @@ TEST(BakerTransport, CornellLampOnTheFloorMatchesQuadrature) {
         const float r2 = glm::dot(w, w);
         const glm::vec3 d = w / std::sqrt(r2);
         // Visibility too, so the check does not hinge on where exactly the blocks stand.
-        Ray ray;
+        trace::Ray ray;
         ray.origin = p;
         ray.direction = d;
         ray.tfar = 0.999f * std::sqrt(r2);
@@ -802,7 +805,7 @@ TEST(BakerTransport, DirectionalLightStraightDownGivesIntensityOverPi) {
 // A point light 1 m above a 4 m floor of 0.1 m texels, with an optional 0.4 m blocker halfway.
 struct PointLightScene {
   Builder b;
-  std::unique_ptr<RayTracer> tracer;
+  std::unique_ptr<trace::RayTracer> tracer;
   uint32_t below = 0, edge = 0;  // the texel under the light and one on the shadow's edge
   glm::vec3 light{2.05f, 1.0f, 2.05f};
 

@@ -18,7 +18,7 @@
 #include <nlohmann/json.hpp>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/reflection_exr.h"
+#include "afterglow/bakefiles/cube_exr.h"
 #include "test_util.h"
 
 namespace fs = std::filesystem;
@@ -195,7 +195,7 @@ TEST(CliBake, ReflectionProbesWriteCubeMapsDfgAndTheirJson) {
     while (in->seek_subimage(0, levels)) ++levels;
     EXPECT_EQ(levels, c.fileLevels);
     in->close();
-    Result<std::vector<runtime::Cubemap>> mips = baker::readCubemapExr(path);
+    Result<std::vector<runtime::Cubemap>> mips = bakefiles::readCubemapExr(path);
     ASSERT_TRUE(mips) << mips.message();
     ASSERT_EQ(mips->size(), 7u);
     for (size_t m = 0; m < mips->size(); ++m) EXPECT_EQ((*mips)[m].size, c.size >> m) << m;
@@ -297,7 +297,9 @@ TEST(CliBake, CtrlCExits130AndWritesNothing) {
   CliChild child({"bake", "builtin:cornell", "-o", out, "--quality", "high", "--texels-per-unit",
                   "256"});
   ASSERT_TRUE(child.started());
-  ASSERT_TRUE(child.waitForStderr("ray tracer: done")) << child.err();
+  // The ray tracer is built: the bake is under way (its progress names come from stages.h).
+  ASSERT_TRUE(child.waitForStderr(std::string(baker::stageName(baker::Stage::RayTracer)) + ": done"))
+      << child.err();
   const int status = child.interruptAndWait();
   ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status) << "\n" << child.err();
   EXPECT_EQ(WEXITSTATUS(status), 130) << child.err();

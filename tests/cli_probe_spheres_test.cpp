@@ -14,8 +14,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "afterglow/baker/raytracer.h"
-#include "afterglow/baker/render.h"
+#include "afterglow/trace/raytracer.h"
+#include "afterglow/preview/render.h"
 #include "afterglow/probes/probes_file.h"
 #include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/scenes/gltf.h"
@@ -29,7 +29,7 @@ using nlohmann::json;
 namespace afterglow::test {
 namespace {
 
-constexpr float kAlbedo = 0.8f;  // the spheres' (baker::kProbeSphereAlbedo, as documented)
+constexpr float kAlbedo = 0.8f;  // the spheres' (preview::kProbeSphereAlbedo, as documented)
 
 // A render's float RGB as written to an EXR, row 0 at the top.
 // A render's linear RGB (through the renderer's own EXR reader), row 0 at the top; empty when
@@ -41,7 +41,7 @@ struct LinearPicture {
 };
 
 LinearPicture readExr(const std::string& path) {
-  Result<baker::LightmapImage> image = baker::readLinearImage(path);
+  Result<bakefiles::LightmapImage> image = bakefiles::readLinearImage(path);
   if (!image) return {};
   return {image->width, image->height, std::move(image->pixels)};
 }
@@ -63,7 +63,7 @@ std::vector<int> spheresPrinted(const std::string& out) {
 }
 
 // The picture point of p in a width × height picture of view (render.h's camera model).
-glm::vec2 project(const baker::View& view, int width, int height, glm::vec3 p) {
+glm::vec2 project(const trace::View& view, int width, int height, glm::vec3 p) {
   const glm::vec3 right = glm::normalize(glm::cross(view.forward, view.up));
   const glm::vec3 d = p - view.position;
   const float z = glm::dot(d, view.forward), t = std::tan(0.5f * view.yfov);
@@ -100,7 +100,7 @@ TEST(CliProbeSpheres, FurnaceSpheresAreAlbedoTimesLeOverOneMinusRho) {
 
   const glm::vec3 sphere(kAlbedo * 2.0f), wall(2.0f);
   // The furnace's camera: at the box's centre, looking down −Z, 90°.
-  const baker::View camera = baker::cameraView(scenes::makeFurnaceBox().cameras.front());
+  const trace::View camera = trace::cameraView(scenes::makeFurnaceBox().cameras.front());
   const std::vector<int> drawn = spheresPrinted(handful.out);
   EXPECT_EQ(drawn.size(), 8u) << handful.out;
   const LinearPicture picture = readExr(dir + "/handful.exr");
@@ -181,7 +181,7 @@ TEST(CliProbeSpheres, UnderHalfASkyEachNormalGetsItsAnalyticIrradiance) {
   ASSERT_EQ(e.width, width);
   ASSERT_EQ(e.height, height);
 
-  const baker::View view = baker::lookAtView(from, at, 40.0f * 3.14159265f / 180.0f);
+  const trace::View view = trace::lookAtView(from, at, 40.0f * 3.14159265f / 180.0f);
   const float radius = 0.2f;
   size_t checked = 0;
   float worst = 0.0f;
@@ -197,8 +197,8 @@ TEST(CliProbeSpheres, UnderHalfASkyEachNormalGetsItsAnalyticIrradiance) {
         bool inside = true;
         for (int sy = 0; sy < 2 && inside; ++sy)
           for (int sx = 0; sx < 2 && inside; ++sx) {
-            const baker::Ray ray =
-                baker::cameraRay(view, width, height, float(x) + 0.25f + 0.5f * float(sx),
+            const trace::Ray ray =
+                trace::cameraRay(view, width, height, float(x) + 0.25f + 0.5f * float(sx),
                                  float(y) + 0.25f + 0.5f * float(sy));
             const glm::vec3 oc = ray.origin - p;
             const float b = glm::dot(oc, ray.direction);

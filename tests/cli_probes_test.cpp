@@ -18,7 +18,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/probes/bake_refinement.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
 #include "afterglow/runtime/runtime.h"
@@ -192,7 +192,7 @@ TEST(CliProbes, BakeRefinementSplitsEdgesWhereTheBakesLightChanges) {
   // None inside geometry: inside the room, off its walls by the margin, and no ray from it meets
   // the back of a surface (the blocks are closed boxes; every surface faces into the room).
   const scenes::Scene scene = scenes::makeCornellBox();
-  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   ASSERT_TRUE(tracer) << tracer.message();
   const float margin = a["settings"].at("margin").get<float>();
   const float room[3] = {0.556f, 0.5488f, 0.5592f};
@@ -206,10 +206,10 @@ TEST(CliProbes, BakeRefinementSplitsEdgesWhereTheBakesLightChanges) {
       for (int y = -1; y <= 1; ++y)
         for (int z = -1; z <= 1; ++z) {
           if (x == 0 && y == 0 && z == 0) continue;
-          baker::Ray ray;
+          trace::Ray ray;
           ray.origin = p;
           ray.direction = glm::normalize(glm::vec3(x, y, z));
-          const baker::Hit hit = tracer.value()->intersect(ray);
+          const trace::Hit hit = tracer.value()->intersect(ray);
           EXPECT_TRUE(!hit.valid() || hit.frontFace) << "probe " << i << " sees a back face";
         }
   }

@@ -17,7 +17,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "afterglow/baker/reflection_exr.h"
+#include "afterglow/bakefiles/cube_exr.h"
 #include "afterglow/runtime/probe_sh_file.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/transport.h"
@@ -264,7 +264,7 @@ CubeDiff compareCubes(const std::vector<runtime::Cubemap>& a, const std::vector<
 }
 
 std::vector<runtime::Cubemap> readCube(const std::string& path) {
-  Result<std::vector<runtime::Cubemap>> cube = baker::readCubemapExr(path);
+  Result<std::vector<runtime::Cubemap>> cube = bakefiles::readCubemapExr(path);
   EXPECT_TRUE(cube) << cube.message();
   return cube ? std::move(cube.value()) : std::vector<runtime::Cubemap>();
 }

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "afterglow/baker/bake.h"
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/parallel.h"
 #include <memory>
@@ -186,7 +186,7 @@ TEST(ProbesBake, CornellMatchesTheReferenceAtFreePoints) {
   options.probes = meshOf(positions);
   const BakeResult r = bakeOrDie(scene, options);
   ASSERT_EQ(r.probeSh.size(), positions.size());
-  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   ASSERT_TRUE(tracer) << tracer.message();
   std::vector<glm::vec3> points, pointNormals, normals;
   std::vector<size_t> which;

@@ -17,7 +17,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/probes/bake_refinement.h"
 #include "afterglow/probes/placement.h"
@@ -114,8 +114,8 @@ float surfaceDistance(glm::vec3 p) {
   return std::min(room, box);
 }
 
-std::unique_ptr<baker::RayTracer> trace(const Scene& scene) {
-  Result<std::unique_ptr<baker::RayTracer>> t = baker::RayTracer::build(scene);
+std::unique_ptr<trace::RayTracer> trace(const Scene& scene) {
+  Result<std::unique_ptr<trace::RayTracer>> t = trace::RayTracer::build(scene);
   EXPECT_TRUE(t.isOk()) << t.message();
   return t ? std::move(t.value()) : nullptr;
 }
@@ -524,10 +524,10 @@ TEST_P(SharedScenePlacement, NoProbeInsideGeometry) {
   for (const glm::vec3& q : p.positions) {
     int back = 0;
     for (const glm::vec3& d : directions) {
-      baker::Ray ray;
+      trace::Ray ray;
       ray.origin = q;
       ray.direction = d;
-      const baker::Hit hit = tracer->intersect(ray);
+      const trace::Hit hit = tracer->intersect(ray);
       if (hit.valid() && !hit.frontFace && !tracer->material(hit).doubleSided &&
           scene->instances[hit.instance].isStatic)
         ++back;

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/probes/reflection_placement.h"
 #include "afterglow/scenes/gltf.h"
@@ -92,8 +92,8 @@ Scene twoRooms() {
   return s;
 }
 
-std::unique_ptr<baker::RayTracer> trace(const Scene& scene) {
-  Result<std::unique_ptr<baker::RayTracer>> t = baker::RayTracer::build(scene);
+std::unique_ptr<trace::RayTracer> trace(const Scene& scene) {
+  Result<std::unique_ptr<trace::RayTracer>> t = trace::RayTracer::build(scene);
   EXPECT_TRUE(t.isOk()) << t.message();
   return t ? std::move(t.value()) : nullptr;
 }
@@ -241,10 +241,10 @@ TEST_P(SharedSceneReflectionPlacement, RoomsGetProbesOutsideGeometry) {
             d[axis] = sign;
             d[(axis + 1) % 3] = -0.75f + 0.5f * float(i);
             d[(axis + 2) % 3] = -0.75f + 0.5f * float(j);
-            baker::Ray ray;
+            trace::Ray ray;
             ray.origin = p.position;
             ray.direction = glm::normalize(d);
-            const baker::Hit hit = tracer->intersect(ray);
+            const trace::Hit hit = tracer->intersect(ray);
             back += hit.valid() && !hit.frontFace && !tracer->material(hit).doubleSided;
           }
     // Inside geometry as the light probes count it: half the rays on single-sided backs.

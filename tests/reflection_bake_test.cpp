@@ -7,10 +7,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "afterglow/baker/reference.h"
 #include "afterglow/runtime/reflection_capture.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/scenes/gltf.h"
+#include "afterglow/trace/raytracer.h"
 #include "test_util.h"
 #include "bake_fixtures.h"
 
@@ -230,18 +232,18 @@ TEST(ReflectionBake, CornellMirrorMipMatchesTheReference) {
   const BakeResult r = bakeOrDie(scene, BakeOptions());
   ASSERT_EQ(r.reflectionChains.size(), 2u);
   const runtime::Cubemap& mip0 = r.reflectionChains[1][0];
-  std::vector<Ray> rays;
+  std::vector<trace::Ray> rays;
   std::vector<glm::vec3> baked;
   for (int face = 0; face < runtime::kCubeFaceCount; ++face)
     for (int y = stride / 2; y < mip0.size; y += stride)
       for (int x = stride / 2; x < mip0.size; x += stride) {
-        Ray ray;
+        trace::Ray ray;
         ray.origin = r.transport.reflections.probes[0].box.capturePosition;
         ray.direction = runtime::cubemapTexelDirection(face, x, y, mip0.size);
         rays.push_back(ray);
         baked.push_back(mip0.at(face, x, y));
       }
-  Result<std::unique_ptr<RayTracer>> tracer = RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   ASSERT_TRUE(tracer) << tracer.message();
   ReferenceOptions ref;
   ref.samples = 4096;

@@ -14,8 +14,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "afterglow/baker/raytracer.h"
-#include "afterglow/baker/render.h"
+#include "afterglow/trace/raytracer.h"
+#include "afterglow/preview/render.h"
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/core/progress.h"
@@ -26,7 +26,7 @@
 #include "afterglow/probes/reflection_placement.h"
 #include "afterglow/probes/tetrahedralize.h"
 #include "args.h"
-#include "baked_probes.h"
+#include "afterglow/bakefiles/read.h"
 #include "commands.h"
 #include "common.h"
 
@@ -183,18 +183,18 @@ int runPlace(int argc, char** argv, int first) {
     return badArgument ? kExitUsage : kExitBadInput;
   }
   const scenes::Scene& scene = loaded.value();
-  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   if (!tracer) {
     printError(input + ": " + tracer.message());
     return kExitBadInput;
   }
 
   // The bake first, so a wrong folder fails before the placement's work.
-  std::optional<BakedProbes> baked;
+  std::optional<bakefiles::BakedProbes> baked;
   double bakeSeconds = 0.0;
   if (!bakeDir.empty()) {
     const auto bakeStart = Clock::now();
-    Result<BakedProbes> loadedBake = loadBakedProbes(bakeDir);
+    Result<bakefiles::BakedProbes> loadedBake = bakefiles::loadBakedProbes(bakeDir);
     if (interrupted()) return interruptedExit();
     if (!loadedBake) {
       printError(loadedBake.message());
@@ -279,8 +279,8 @@ int runPlace(int argc, char** argv, int first) {
   for (size_t i = 0, u = 0; i < placement.positions.size() && u < options.userNames.size(); ++i)
     if (placement.kinds[i] == probes::ProbeKind::Pinned) names[i] = options.userNames[u++];
 
-  baker::View view = scene.cameras.empty() ? baker::defaultView(scene, 0.9f)
-                                           : baker::cameraView(scene.cameras.front());
+  trace::View view = scene.cameras.empty() ? trace::defaultView(scene, 0.9f)
+                                           : trace::cameraView(scene.cameras.front());
   const std::vector<glm::vec3> picture =
       probes::placementPicture(scene, *tracer.value(), placement, options.levels, view,
                                  width, height, reflections.probes);
@@ -344,7 +344,7 @@ int runPlace(int argc, char** argv, int first) {
     printError(st.message());
     return kExitOutput;
   }
-  if (Status st = baker::writeRenderPng(files.tempPath(picturePath), width, height, picture, 0.0f);
+  if (Status st = preview::writeRenderPng(files.tempPath(picturePath), width, height, picture, 0.0f);
       !st) {
     printError(st.message());
     return kExitOutput;

@@ -10,7 +10,7 @@
 
 #include "afterglow/runtime/probe_tetrahedra.h"
 #include "args.h"
-#include "baked_probes.h"
+#include "afterglow/bakefiles/read.h"
 #include "commands.h"
 #include "common.h"
 
@@ -65,13 +65,13 @@ int runProbesSample(int argc, char** argv, int first) {
     normals = {{"+X", {1, 0, 0}}, {"-X", {-1, 0, 0}}, {"+Y", {0, 1, 0}},
                {"-Y", {0, -1, 0}}, {"+Z", {0, 0, 1}}, {"-Z", {0, 0, -1}}};
 
-  Result<BakedProbes> loaded = loadBakedProbes(outDir);
+  Result<bakefiles::BakedProbes> loaded = bakefiles::loadBakedProbes(outDir);
   if (interrupted()) return interruptedExit();
   if (!loaded) {
     printError(loaded.message());
     return kExitBadInput;
   }
-  const BakedProbes& baked = loaded.value();
+  const bakefiles::BakedProbes& baked = loaded.value();
   const runtime::ProbeTetrahedra& mesh = baked.runtime->data().probes.mesh;
 
   json all = json::array();

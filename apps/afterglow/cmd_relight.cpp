@@ -13,7 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "afterglow/baker/bake_output.h"
+#include "afterglow/bakefiles/write.h"
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/status.h"
 #include "afterglow/probes/probes_file.h"
@@ -22,7 +22,7 @@
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/material_eval.h"
 #include "args.h"
-#include "baked_probes.h"
+#include "afterglow/bakefiles/read.h"
 #include "commands.h"
 #include "common.h"
 
@@ -270,7 +270,7 @@ int runRelight(int argc, char** argv, int first) {
     return kExitBadInput;
   }
   json& settings = report["settings"];
-  const Result<int> baked = bakedBounces(settings, reportPath.string());
+  const Result<int> baked = bakefiles::bakedBounces(settings, reportPath.string());
   if (!baked) {
     printError(baked.message());
     return kExitBadInput;
@@ -518,9 +518,9 @@ int runRelight(int argc, char** argv, int first) {
     const std::vector<uint32_t>& texelOf = rt->data().atlases[size_t(a)].texelOfPixel;
     for (size_t p = 0; p < covered.size() && p < texelOf.size(); ++p)
       covered[p] = texelOf[p] != runtime::kNoTexel;
-    const float exposure = baker::autoExposure(image, covered);
-    Status s = baker::writeExr((outDir / exr).string(), w, h, image, files);
-    if (s) s = baker::writeTonemappedPng((outDir / png).string(), w, h, image, exposure, files);
+    const float exposure = bakefiles::autoExposure(image, covered);
+    Status s = bakefiles::writeExr((outDir / exr).string(), w, h, image, files);
+    if (s) s = bakefiles::writeTonemappedPng((outDir / png).string(), w, h, image, exposure, files);
     if (!s) {
       printError(s.message());
       return kExitOutput;
@@ -562,7 +562,7 @@ int runRelight(int argc, char** argv, int first) {
   if (s && rt->reflectionProbeCount() > 0) {
     std::vector<runtime::CubemapChain> chains;
     for (int p = 0; p < rt->reflectionProbeCount(); ++p) chains.push_back(rt->reflectionChain(p));
-    s = baker::writeReflectionOutputs(rt->data(), chains, rt->dfgTable(), outDir.string(), gltf,
+    s = bakefiles::writeReflectionOutputs(rt->data(), chains, rt->dfgTable(), outDir.string(), gltf,
                                       files, reflectionFiles);
   }
   if (s) s = files.write((outDir / "scene.gltf").string(), gltf.dump(1) + "\n");

@@ -9,9 +9,9 @@
 #include <limits>
 #include <string>
 
-#include "afterglow/baker/probe_spheres.h"
-#include "afterglow/baker/raytracer.h"
-#include "afterglow/baker/render.h"
+#include "afterglow/preview/probe_spheres.h"
+#include "afterglow/trace/raytracer.h"
+#include "afterglow/preview/render.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/probes/probes_file.h"
 #include "afterglow/runtime/probe_sh_file.h"
@@ -81,16 +81,16 @@ bool hasLightmapLayout(const scenes::Scene& scene) {
 // What shades the picture: the bake's lighting for --reference, its lightmaps otherwise.
 // Loaded before the (slower) ray tracer so that bad inputs fail fast. Returns the exit code.
 int loadShading(const std::string& input, const scenes::Scene& scene, bool reference, bool quiet,
-                baker::Environment* environment, std::vector<baker::LightmapImage>* lightmaps,
-                baker::BakedReflections* reflections) {
+                baker::Environment* environment, std::vector<bakefiles::LightmapImage>* lightmaps,
+                bakefiles::BakedReflections* reflections) {
   if (!reference) {
-    Result<std::vector<baker::LightmapImage>> loaded = baker::loadBakedLightmaps(input);
+    Result<std::vector<bakefiles::LightmapImage>> loaded = bakefiles::loadBakedLightmaps(input);
     if (!loaded) {
       printError(loaded.message());
       return kExitBadInput;
     }
     *lightmaps = std::move(loaded.value());
-    Result<baker::BakedReflections> probes = baker::loadBakedReflections(input);
+    Result<bakefiles::BakedReflections> probes = bakefiles::loadBakedReflections(input);
     if (!probes) {
       printError(probes.message());
       return kExitBadInput;
@@ -104,7 +104,7 @@ int loadShading(const std::string& input, const scenes::Scene& scene, bool refer
     return kExitBadInput;
   }
   bool reportFound = false;
-  Result<baker::Environment> loaded = baker::loadBakeEnvironment(input, &reportFound);
+  Result<baker::Environment> loaded = bakefiles::loadBakeEnvironment(input, &reportFound);
   if (!loaded) {
     printError(loaded.message());
     return kExitBadInput;
@@ -126,48 +126,21 @@ bool isSphereCount(const std::string& next) {
   return digits || next == "all";
 }
 
-// The light probes `afterglow bake` wrote beside the scene: OUT/probes/light_probes.json (the
-// positions and tetrahedra) and light_probes_sh.bin (their SH, in the same order). Errors name
-// the file.
-Result<baker::LightProbes> loadLightProbes(const std::string& gltfPath) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::path(gltfPath).parent_path() / "probes";
-  const std::string json = (dir / "light_probes.json").string();
-  const std::string bin = (dir / "light_probes_sh.bin").string();
-  std::error_code ec;
-  for (const std::string& path : {json, bin})
-    if (!fs::is_regular_file(path, ec))
-      return Status::error(path + ": no such file; --probe-spheres reads the light probes "
-                           "afterglow bake writes beside the scene.gltf (not with --probes none)");
-  Result<probes::ProbesFile> file = probes::readProbesFile(json);
-  if (!file) return file.status();
-  runtime::ProbeShFile sh;
-  std::string error;
-  if (!runtime::readProbeSh(bin, sh, &error)) return Status::error(error);
-  if (sh.sh.size() != file->positions.size())
-    return Status::error(format("%s: %zu probes' SH for the %zu probes of %s", bin.c_str(),
-                                sh.sh.size(), file->positions.size(), json.c_str()));
-  baker::LightProbes out;
-  out.mesh = std::move(file->mesh);
-  out.sh = std::move(sh.sh);
-  return out;
-}
-
 // Which probes got spheres, so that a sphere in the picture can be traced to its probe.
-void printSpheres(const std::vector<baker::ProbeSphere>& spheres, int count, size_t probes) {
+void printSpheres(const std::vector<preview::ProbeSphere>& spheres, int count, size_t probes) {
   if (spheres.empty()) {
     std::printf("note          no light probe is in view: the picture has no probe spheres\n");
     return;
   }
   float lo = spheres.front().radius, hi = lo;
-  for (const baker::ProbeSphere& s : spheres) {
+  for (const preview::ProbeSphere& s : spheres) {
     lo = std::min(lo, s.radius);
     hi = std::max(hi, s.radius);
   }
   const std::string radius = lo == hi
                                  ? format("radius %.3g m", double(lo))
                                  : format("radius %.3g-%.3g m", double(lo), double(hi));
-  const double albedo = double(baker::kProbeSphereAlbedo);
+  const double albedo = double(preview::kProbeSphereAlbedo);
   if (count == 0) {
     std::printf("spheres       at every probe: %zu of %zu may show in this view (%s, albedo "
                 "%.1f)\n",
@@ -175,7 +148,7 @@ void printSpheres(const std::vector<baker::ProbeSphere>& spheres, int count, siz
     return;
   }
   std::string which;
-  for (const baker::ProbeSphere& s : spheres)
+  for (const preview::ProbeSphere& s : spheres)
     which += (which.empty() ? "" : ", ") + std::to_string(s.probe);
   std::printf("spheres       %zu at probes %s (%s, albedo %.1f)\n", spheres.size(), which.c_str(),
               radius.c_str(), albedo);
@@ -217,7 +190,7 @@ int runRender(int argc, char** argv, int first) {
   if (!exr && !endsWith(output, ".png"))
     return usage("the output must end in .png (tone mapped) or .exr (linear), got '" + output +
                  "'");
-  baker::RenderOptions options;
+  preview::RenderOptions options;
   int threads = 0;
   int spp = 256;
   float fovDeg = 45.0f;
@@ -276,15 +249,15 @@ int runRender(int argc, char** argv, int first) {
   const bool reference = args.has("reference");
   const bool quiet = args.has("quiet");
   baker::Environment environment;
-  std::vector<baker::LightmapImage> lightmaps;
-  baker::BakedReflections reflections;
+  std::vector<bakefiles::LightmapImage> lightmaps;
+  bakefiles::BakedReflections reflections;
   if (int code = loadShading(input, scene, reference, quiet, &environment, &lightmaps,
                              &reflections);
       code != kExitOk)
     return code;
-  baker::LightProbes lightProbes;
+  bakefiles::LightProbes lightProbes;
   if (sphereCount >= 0) {
-    Result<baker::LightProbes> probes = loadLightProbes(input);
+    Result<bakefiles::LightProbes> probes = bakefiles::loadLightProbes(input);
     if (!probes) {
       printError(probes.message());
       return kExitBadInput;
@@ -294,9 +267,9 @@ int runRender(int argc, char** argv, int first) {
   if (interrupted()) return interruptedExit();
 
   const float fovRad = fovDeg * 3.14159265f / 180.0f;
-  baker::View view;
+  trace::View view;
   if (lookAt) {
-    view = baker::lookAtView(from, at, fovRad);
+    view = trace::lookAtView(from, at, fovRad);
   } else if (args.has("camera")) {
     const std::string name = args.get("camera");
     const scenes::Camera* camera = nullptr;
@@ -309,23 +282,23 @@ int runRender(int argc, char** argv, int first) {
                  (names.empty() ? std::string(" (it has no cameras)") : " (it has: " + names + ")"));
       return kExitBadInput;
     }
-    view = baker::cameraView(*camera);
+    view = trace::cameraView(*camera);
     if (args.has("fov")) view.yfov = fovRad;
   } else if (!scene.cameras.empty()) {
-    view = baker::cameraView(scene.cameras.front());
+    view = trace::cameraView(scene.cameras.front());
     if (args.has("fov")) view.yfov = fovRad;
   } else {
-    view = baker::defaultView(scene, fovRad);
+    view = trace::defaultView(scene, fovRad);
   }
 
-  Result<std::unique_ptr<baker::RayTracer>> tracer = baker::RayTracer::build(scene);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   if (!tracer) {
     printError(tracer.message());
     return kExitBadInput;
   }
-  std::vector<baker::ProbeSphere> spheres;
+  std::vector<preview::ProbeSphere> spheres;
   if (sphereCount >= 0) {
-    Result<std::vector<baker::ProbeSphere>> chosen = baker::chooseProbeSpheres(
+    Result<std::vector<preview::ProbeSphere>> chosen = preview::chooseProbeSpheres(
         *tracer.value(), lightProbes, view, options.width, options.height, sphereCount);
     if (!chosen) {
       printError(input + ": light probes: " + chosen.message());
@@ -335,13 +308,13 @@ int runRender(int argc, char** argv, int first) {
     // With reflection probes every second and third sphere is a mirror and a rough metal.
     if (!reflections.empty())
       for (size_t i = 0; i < spheres.size(); ++i)
-        spheres[i].finish = baker::SphereFinish(i % 3);
+        spheres[i].finish = preview::SphereFinish(i % 3);
     if (!quiet) printSpheres(spheres, sphereCount, lightProbes.sh.size());
   }
   Result<std::vector<glm::vec3>> image =
-      reference ? baker::renderReference(scene, *tracer.value(), environment, view, options, spp,
-                                         progress)
-                : baker::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress,
+      reference ? baker::renderReference(scene, *tracer.value(), environment, view, options.width,
+                                         options.height, spp, progress)
+                : preview::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress,
                                      spheres, &reflections);
   if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!image) {
@@ -349,8 +322,8 @@ int runRender(int argc, char** argv, int first) {
     return kExitBadInput;
   }
   const Status st =
-      exr ? baker::writeRenderExr(output, options.width, options.height, image.value())
-          : baker::writeRenderPng(output, options.width, options.height, image.value(), exposure);
+      exr ? preview::writeRenderExr(output, options.width, options.height, image.value())
+          : preview::writeRenderPng(output, options.width, options.height, image.value(), exposure);
   if (!st) {
     printError(st.message());
     return kExitOutput;
@@ -361,7 +334,7 @@ int runRender(int argc, char** argv, int first) {
                   : std::string("baked: albedo x lightmap + emission") +
                         (spheres.empty() ? ""
                                          : format(", probe spheres %.1f x E/pi",
-                                                  double(baker::kProbeSphereAlbedo)));
+                                                  double(preview::kProbeSphereAlbedo)));
     std::printf("wrote         %s (%dx%d, %s)\n", output.c_str(), options.width, options.height,
                 how.c_str());
   }

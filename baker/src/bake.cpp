@@ -1,24 +1,42 @@
+// bake(): the precompute's stages in stages.h's order, from one table (kStages), each timed and
+// its rays counted as it runs.
 #include "afterglow/baker/bake.h"
 
-#include "filter_light_edges.h"
-
 #include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <memory>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/direct.h"
+#include "afterglow/baker/gather.h"
+#include "afterglow/baker/links.h"
+#include "afterglow/baker/probe_transfer.h"
+#include "afterglow/baker/reference.h"
+#include "afterglow/baker/reflection_capture.h"
+#include "afterglow/baker/sky.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/core/timer.h"
 #include "afterglow/runtime/reflection_prefilter.h"
-#include "afterglow/baker/reference.h"
-#include "filter_light_edges.h"
-#include "lightmap_post.h"
-#include "sky_image.h"
+#include "afterglow/runtime/solver.h"
+#include "afterglow/trace/raytracer.h"
+#include "post/lightmap_post.h"
+#include "precompute/filter_light_edges.h"
 
 namespace afterglow::baker {
 
 namespace {
+
+// What the stages hand each other.
+struct Bake {
+  Bake(const scenes::Scene& s, const BakeOptions& o, Progress& p)
+      : scene(s), options(o), progress(p) {}
+  const scenes::Scene& scene;
+  const BakeOptions& options;
+  Progress& progress;
+  glm::vec3 sky[runtime::kShCount] = {};
+  std::unique_ptr<trace::RayTracer> tracer;
+  TexelGather gather;            // from gather to links (the bake's largest buffer)
+  std::vector<Clusters> far;     // far cluster levels, finest first
+  BakeResult result;
+};
 
 // The authored light settings the solve uses: light sources follow Scene::lights in order
 // (matched by name when the counts differ).
@@ -43,101 +61,207 @@ void applyLightSettings(const scenes::Scene& scene, runtime::TransportData& tr) 
       }
 }
 
-// Stages 2 to 5: clusters, form factors, direct light, then one solve with the authored lights.
-Status precomputeAndSolve(const scenes::Scene& scene, const RayTracer& tracer,
-                          const BakeOptions& options, const glm::vec3 sky[runtime::kShCount],
-                          BakeResult& result, Progress& progress) {
-  runtime::TransportData& tr = result.transport;
-  auto cancelled = [&]() { return progress.cancelled(); };
-  uint64_t raysBefore = tracer.raysTraced();
-  auto record = [&](const char* name, Clock::time_point t0) {
-    const uint64_t rays = tracer.raysTraced();
-    result.stages.push_back({name, secondsSince(t0), rays - raysBefore});
-    raysBefore = rays;
-  };
-  auto t0 = Clock::now();
-  Result<TexelGather> gather = gatherTexels(scene, tracer, result.texels, options.links, progress);
-  if (cancelled()) return Status::error("cancelled");
-  if (!gather) return gather.status();
-  record("gather", t0);
+Status buildTracer(Bake& b) {
+  b.progress.begin(stageName(Stage::RayTracer), 1);
+  Result<std::unique_ptr<trace::RayTracer>> built = trace::RayTracer::build(b.scene);
+  b.progress.end();
+  if (!built) return built.status();
+  b.tracer = std::move(built.value());
+  const trace::RayTracerStats& stats = b.tracer->stats();
+  if (stats.invalidTriangles > 0)
+    b.result.warnings.push_back(
+        format("%zu triangles with bad indices or non-finite vertices were ignored",
+               stats.invalidTriangles));
+  if (stats.skippedInstances > 0)
+    b.result.warnings.push_back(
+        format("%zu instances without a valid mesh were skipped", stats.skippedInstances));
+  return Status::ok();
+}
 
-  t0 = Clock::now();
-  progress.begin("clusters", 1);
-  result.clusters =
-      computeClusters(scene, &tracer, result.texels, &gather.value(), options.clusters);
-  std::vector<Clusters> far;
-  if (options.clusters.farScale > 1.0f && options.links.farDistance > 0.0f)
-    for (int level = 1; level <= options.clusters.farLevels; ++level)
-      far.push_back(computeClusters(scene, &tracer, result.texels, &gather.value(),
-                                    farClusterOptions(options.clusters, level)));
-  progress.advance();
-  progress.end();
-  record("clusters", t0);
-  if (cancelled()) return Status::error("cancelled");
+Status placeTexels(Bake& b) {
+  Result<TexelSet> texels = computeTexels(b.scene, *b.tracer, b.options.texels, b.progress);
+  if (!texels) return texels.status();
+  b.result.texels = std::move(texels.value());
+  if (b.result.texels.size() == 0)
+    return Status::error("nothing to bake: no static instance has lightmap texels (run uv first)");
+  return Status::ok();
+}
 
-  // The direct light before the links: their far clusters' light check and the smoothing's
-  // read it (LinkOptions::farLightRatio, filterLightRatio).
-  t0 = Clock::now();
-  Status st =
-      computeDirect(scene, tracer, result.texels, result.clusters, options.direct, tr, progress);
-  if (cancelled()) return Status::error("cancelled");
-  if (!st) return st;
-  record("direct", t0);
-
-  t0 = Clock::now();
-  st = refineGather(scene, tracer, result.texels, result.clusters, tr, options.links,
-                    gather.value(), progress);
-  if (cancelled()) return Status::error("cancelled");
-  if (!st) return st;
-  record("refine", t0);
-
-  t0 = Clock::now();
-  st = computeLinks(scene, tracer, result.texels, gather.value(), result.clusters, options.links,
-                    tr, progress, far);
-  if (cancelled()) return Status::error("cancelled");
-  if (!st) return st;
-  cutSmoothingAcrossLight(result.texels, options.links.filterLightRatio,
-                          options.links.filterNoiseSigmas, gather->pointRays(), tr);
-  record("links", t0);
-  gather = TexelGather();  // the hit codes are the bake's largest buffer
-
-  if (!options.probes.positions.empty()) {
-    t0 = Clock::now();
-    st = computeProbeTransfer(scene, tracer, result.texels, result.clusters, far,
-                              options.links.farDistance, options.links.farLightRatio,
-                              options.probes, options.probeOptions, tr, progress);
-    if (cancelled()) return Status::error("cancelled");
-    if (!st) return st;
-    record("probes", t0);
+// Brute force over the same texels, for validation: no clusters, links or transport.
+Status traceReference(Bake& b) {
+  Environment env;
+  std::copy(b.sky, b.sky + runtime::kShCount, env.skySh);
+  env.indirectIntensity = b.options.indirectIntensity;
+  env.albedoBoost = b.options.albedoBoost;
+  BakeResult& r = b.result;
+  Result<ReferenceTexels> ref = referenceTexels(b.scene, *b.tracer, r.texels, env,
+                                                b.options.referenceOptions, {}, b.progress);
+  if (!ref) return ref.status();
+  r.texelDirect.assign(r.texels.size(), glm::vec3(0.0f));
+  r.texelIndirect.assign(r.texels.size(), glm::vec3(0.0f));
+  for (size_t i = 0; i < ref->texels.size(); ++i) {
+    r.texelDirect[ref->texels[i]] = ref->direct[i];
+    r.texelIndirect[ref->texels[i]] = ref->indirect[i];
   }
-  result.raysTraced = tracer.raysTraced();
-  result.raysIntersected = tracer.raysTraced(RayTracer::Query::Intersect);
-  result.raysOccluded = tracer.raysTraced(RayTracer::Query::Occluded);
+  return Status::ok();
+}
 
-  applyLightSettings(scene, tr);
-  tr.indirectIntensity = options.indirectIntensity;
-  tr.albedoBoost = options.albedoBoost;
-  std::copy(sky, sky + runtime::kShCount, tr.skySh);
+Status traceGather(Bake& b) {
+  Result<TexelGather> gather =
+      gatherTexels(b.scene, *b.tracer, b.result.texels, b.options.links, b.progress);
+  if (!gather) return gather.status();
+  b.gather = std::move(gather.value());
+  return Status::ok();
+}
+
+Status groupClusters(Bake& b) {
+  const ClusterOptions& o = b.options.clusters;
+  b.progress.begin(stageName(Stage::Clusters), 1);
+  b.result.clusters = computeClusters(b.scene, b.tracer.get(), b.result.texels, &b.gather, o);
+  if (o.farScale > 1.0f && b.options.links.farDistance > 0.0f)
+    for (int level = 1; level <= o.farLevels; ++level)
+      b.far.push_back(computeClusters(b.scene, b.tracer.get(), b.result.texels, &b.gather,
+                                      farClusterOptions(o, level)));
+  b.progress.advance();
+  b.progress.end();
+  return Status::ok();
+}
+
+// Before the links: their far clusters' light check and the smoothing's read it
+// (LinkOptions::farLightRatio, filterLightRatio).
+Status traceDirect(Bake& b) {
+  return computeDirect(b.scene, *b.tracer, b.result.texels, b.result.clusters, b.options.direct,
+                       b.result.transport, b.progress);
+}
+
+Status refine(Bake& b) {
+  return refineGather(b.scene, *b.tracer, b.result.texels, b.result.clusters,
+                      b.result.transport, b.options.links, b.gather, b.progress);
+}
+
+Status link(Bake& b) {
+  const LinkOptions& o = b.options.links;
+  Status st = computeLinks(b.scene, *b.tracer, b.result.texels, b.gather, b.result.clusters, o,
+                           b.result.transport, b.progress, b.far);
+  if (!st) return st;
+  cutSmoothingAcrossLight(b.result.texels, o.filterLightRatio, o.filterNoiseSigmas,
+                          b.gather.pointRays(), b.result.transport);
+  b.gather = TexelGather();  // the hit codes are the bake's largest buffer
+  return Status::ok();
+}
+
+Status traceProbes(Bake& b) {
+  const LinkOptions& o = b.options.links;
+  return computeProbeTransfer(b.scene, *b.tracer, b.result.texels, b.result.clusters, b.far,
+                              o.farDistance, o.farLightRatio, b.options.probes,
+                              b.options.probeOptions, b.result.transport, b.progress);
+}
+
+// One solve with the authored lights, sky and intensities.
+Status solve(Bake& b) {
+  b.far = {};  // they served the links and the probes
+  runtime::TransportData& tr = b.result.transport;
+  applyLightSettings(b.scene, tr);
+  tr.indirectIntensity = b.options.indirectIntensity;
+  tr.albedoBoost = b.options.albedoBoost;
+  std::copy(b.sky, b.sky + runtime::kShCount, tr.skySh);
   // The solver indexes these without checks; a stage that filled them inconsistently is a bug
   // to report, not a crash.
   if (const std::string why = tr.validate(); !why.empty())
     return Status::error("internal error: inconsistent transport: " + why);
-
-  t0 = Clock::now();
-  progress.begin("solve", 1);
+  b.progress.begin(stageName(Stage::Solve), 1);
   {
     runtime::Solver solver(tr);
     solver.setParallelFor(blockRanges());
-    solver.solve(options.solve);
-    solver.gatherTexels(result.texelDirect, result.texelIndirect);
-    result.probeSh.resize(solver.probeCount());
-    solver.probeRadiance(0, result.probeSh.size(), result.probeSh.data());
+    solver.solve(b.options.solve);
+    solver.gatherTexels(b.result.texelDirect, b.result.texelIndirect);
+    b.result.probeSh.resize(solver.probeCount());
+    solver.probeRadiance(0, b.result.probeSh.size(), b.result.probeSh.data());
   }
-  progress.advance();
-  progress.end();
-  record("solve", t0);
+  b.progress.advance();
+  b.progress.end();
   return Status::ok();
 }
+
+Status dilate(Bake& b) {
+  BakeResult& r = b.result;
+  b.progress.begin(stageName(Stage::Dilate), 1);
+  PostOptions post;
+  post.dilation = b.options.dilation;
+  computeAtlasMixes(r.texels, b.scene, post);
+  {
+    // The transport carries the same atlas layouts, so the runtime resolves relit values alike.
+    std::vector<glm::vec3> values(r.texelDirect.size());
+    for (size_t t = 0; t < values.size(); ++t) values[t] = r.texelDirect[t] + r.texelIndirect[t];
+    for (const runtime::AtlasLayout& layout : r.texels.atlases) {
+      r.lightmaps.emplace_back();
+      runtime::resolveAtlas(layout, values, r.lightmaps.back());
+    }
+    if (!b.options.reference) r.transport.atlases = r.texels.atlases;
+  }
+  b.progress.advance();
+  b.progress.end();
+  // Texels no valid texel of their instance reaches (a wholly buried object) stay black.
+  size_t unreached = 0;
+  for (const runtime::AtlasLayout& layout : r.texels.atlases)
+    for (size_t i = 0; i + 1 < layout.mixStart.size(); ++i)
+      unreached += layout.mixStart[i] == layout.mixStart[i + 1];
+  if (unreached > 0)
+    r.warnings.push_back(format(
+        "%zu invalid texels had no valid texel in their chart to take light from and stay black",
+        unreached));
+  return Status::ok();
+}
+
+// Captured from the finished lightmaps, through the runtime's own passes, so a relight from
+// scratch gives these cubemaps bit for bit.
+Status captureReflections(Bake& b) {
+  Status st = captureReflectionProbes(b.scene, *b.tracer, b.options.reflections,
+                                      b.result.transport, b.progress);
+  if (!st) return st;
+  if (const std::string why = b.result.transport.validate(); !why.empty())
+    return Status::error("internal error: inconsistent transport: " + why);
+  return Status::ok();
+}
+
+Status reflectionPasses(Bake& b) {
+  BakeResult& r = b.result;
+  b.progress.begin(stageName(Stage::ReflectionPasses), 1);
+  r.dfg = runtime::dfgTable(runtime::kDfgSize);
+  r.reflectionChains =
+      runtime::solveReflectionProbes(r.transport, r.lightmaps, r.dfg, runtime::kDfgSize);
+  b.progress.advance();
+  b.progress.end();
+  return Status::ok();
+}
+
+bool always(const Bake&) { return true; }
+bool reference(const Bake& b) { return b.options.reference; }
+bool precompute(const Bake& b) { return !b.options.reference; }
+bool probes(const Bake& b) { return precompute(b) && !b.options.probes.positions.empty(); }
+bool reflections(const Bake& b) { return precompute(b) && !b.scene.reflectionProbes.empty(); }
+
+// The precompute's part of stages.h's list, in its order.
+struct StageEntry {
+  Stage stage;
+  bool (*runs)(const Bake&);
+  Status (*run)(Bake&);
+};
+constexpr StageEntry kStages[] = {
+    {Stage::RayTracer, always, buildTracer},
+    {Stage::Texels, always, placeTexels},
+    {Stage::Reference, reference, traceReference},
+    {Stage::Gather, precompute, traceGather},
+    {Stage::Clusters, precompute, groupClusters},
+    {Stage::Direct, precompute, traceDirect},
+    {Stage::Refine, precompute, refine},
+    {Stage::Links, precompute, link},
+    {Stage::Probes, probes, traceProbes},
+    {Stage::Solve, precompute, solve},
+    {Stage::Dilate, always, dilate},
+    {Stage::ReflectionCapture, reflections, captureReflections},
+    {Stage::ReflectionPasses, reflections, reflectionPasses},
+};
 
 }  // namespace
 
@@ -163,130 +287,28 @@ BakeOptions bakePreset(Quality quality) {
 
 Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
                         Progress& progress) {
-  BakeResult result;
-  auto cancelled = [&]() { return progress.cancelled(); };
-  const RayTracer* traced = nullptr;  // once built: a stage's rays are its count since the last
-  uint64_t raysBefore = 0;
-  auto record = [&](const char* name, Clock::time_point t0) {
-    const uint64_t rays = traced ? traced->raysTraced() : 0;
-    result.stages.push_back({name, secondsSince(t0), rays - raysBefore});
-    raysBefore = rays;
-  };
-
+  Bake b(scene, options, progress);
   // The sky first: a bad image path should fail before minutes of precompute.
-  glm::vec3 sky[runtime::kShCount];
   if (!options.skyImage.empty()) {
-    Status s = projectEquirectSky(options.skyImage, sky);
-    if (!s) return s;
+    if (Status s = projectEquirectSky(options.skyImage, b.sky); !s) return s;
   } else {
-    runtime::constantSkySh(options.skyColor, sky);
+    runtime::constantSkySh(options.skyColor, b.sky);
   }
-
-  auto t0 = Clock::now();
-  progress.begin("ray tracer", 1);
-  Result<std::unique_ptr<RayTracer>> built = RayTracer::build(scene);
-  progress.end();
-  if (!built) return built.status();
-  const RayTracer& tracer = *built.value();
-  traced = &tracer;
-  record("raytracer", t0);
-  const RayTracerStats& stats = tracer.stats();
-  if (stats.invalidTriangles > 0)
-    result.warnings.push_back(
-        format("%zu triangles with bad indices or non-finite vertices were ignored",
-               stats.invalidTriangles));
-  if (stats.skippedInstances > 0)
-    result.warnings.push_back(
-        format("%zu instances without a valid mesh were skipped", stats.skippedInstances));
-  if (cancelled()) return Status::error("cancelled");
-
-  t0 = Clock::now();
-  Result<TexelSet> texels = computeTexels(scene, tracer, options.texels, progress);
-  if (cancelled()) return Status::error("cancelled");
-  if (!texels) return texels.status();
-  result.texels = std::move(texels.value());
-  record("texels", t0);
-  if (result.texels.size() == 0)
-    return Status::error("nothing to bake: no static instance has lightmap texels (run uv first)");
-
-  if (options.reference) {
-    // Brute force over the same texels, for validation: no clusters, links or transport.
-    t0 = Clock::now();
-    Environment env;
-    std::copy(sky, sky + runtime::kShCount, env.skySh);
-    env.indirectIntensity = options.indirectIntensity;
-    env.albedoBoost = options.albedoBoost;
-    Result<ReferenceTexels> ref =
-        referenceTexels(scene, tracer, result.texels, env, options.referenceOptions, {}, progress);
-    if (cancelled()) return Status::error("cancelled");
-    if (!ref) return ref.status();
-    result.texelDirect.assign(result.texels.size(), glm::vec3(0.0f));
-    result.texelIndirect.assign(result.texels.size(), glm::vec3(0.0f));
-    for (size_t i = 0; i < ref->texels.size(); ++i) {
-      result.texelDirect[ref->texels[i]] = ref->direct[i];
-      result.texelIndirect[ref->texels[i]] = ref->indirect[i];
-    }
-    record("reference", t0);
-    result.raysTraced = tracer.raysTraced();
-    result.raysIntersected = tracer.raysTraced(RayTracer::Query::Intersect);
-    result.raysOccluded = tracer.raysTraced(RayTracer::Query::Occluded);
-  } else {
-    Status st = precomputeAndSolve(scene, tracer, options, sky, result, progress);
+  uint64_t raysBefore = 0;
+  for (const StageEntry& entry : kStages) {
+    if (!entry.runs(b)) continue;
+    const Clock::time_point t0 = Clock::now();
+    const Status st = entry.run(b);
+    if (progress.cancelled()) return Status::error("cancelled");
     if (!st) return st;
-    raysBefore = tracer.raysTraced();  // counted in the stages it recorded
+    const uint64_t rays = b.tracer ? b.tracer->raysTraced() : 0;
+    b.result.stages.push_back({entry.stage, secondsSince(t0), rays - raysBefore});
+    raysBefore = rays;
   }
-  if (cancelled()) return Status::error("cancelled");
-
-  t0 = Clock::now();
-  progress.begin("dilate", 1);
-  PostOptions post;
-  post.dilation = options.dilation;
-  computeAtlasMixes(result.texels, scene, post);
-  {
-    // The transport carries the same atlas layouts, so the runtime resolves relit values alike.
-    std::vector<glm::vec3> values(result.texelDirect.size());
-    for (size_t t = 0; t < values.size(); ++t)
-      values[t] = result.texelDirect[t] + result.texelIndirect[t];
-    for (const runtime::AtlasLayout& layout : result.texels.atlases) {
-      result.lightmaps.emplace_back();
-      runtime::resolveAtlas(layout, values, result.lightmaps.back());
-    }
-    if (!options.reference) result.transport.atlases = result.texels.atlases;
-  }
-  progress.advance();
-  progress.end();
-  record("dilate", t0);
-  // Texels no valid texel of their instance reaches (a wholly buried object) stay black.
-  size_t unreached = 0;
-  for (const runtime::AtlasLayout& layout : result.texels.atlases)
-    for (size_t i = 0; i + 1 < layout.mixStart.size(); ++i)
-      unreached += layout.mixStart[i] == layout.mixStart[i + 1];
-  if (unreached > 0)
-    result.warnings.push_back(format(
-        "%zu invalid texels had no valid texel in their chart to take light from and stay black",
-        unreached));
-
-  if (!options.reference && !scene.reflectionProbes.empty()) {
-    // Captured from the finished lightmaps, through the runtime's own passes, so a relight
-    // from scratch gives these cubemaps bit for bit.
-    t0 = Clock::now();
-    Status st = captureReflectionProbes(scene, tracer, options.reflections, result.transport,
-                                        progress);
-    if (cancelled()) return Status::error("cancelled");
-    if (!st) return st;
-    if (const std::string why = result.transport.validate(); !why.empty())
-      return Status::error("internal error: inconsistent transport: " + why);
-    record("reflection capture", t0);
-    t0 = Clock::now();
-    progress.begin("reflection passes", 1);
-    result.dfg = runtime::dfgTable(runtime::kDfgSize);
-    result.reflectionChains = runtime::solveReflectionProbes(result.transport, result.lightmaps,
-                                                             result.dfg, runtime::kDfgSize);
-    progress.advance();
-    progress.end();
-    record("reflection passes", t0);
-  }
-  return result;
+  b.result.raysTraced = b.tracer->raysTraced();
+  b.result.raysIntersected = b.tracer->raysTraced(trace::RayTracer::Query::Intersect);
+  b.result.raysOccluded = b.tracer->raysTraced(trace::RayTracer::Query::Occluded);
+  return std::move(b.result);
 }
 
 }  // namespace afterglow::baker

@@ -26,7 +26,7 @@ float irradianceDifference(const AxisIrradiance& a, const AxisIrradiance& b, flo
   return worst;
 }
 
-Result<BakeRefinement> refineByBake(const scenes::Scene& scene, const baker::RayTracer& tracer,
+Result<BakeRefinement> refineByBake(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                     const PlacementOptions& placementOptions,
                                     const runtime::ProbeTetrahedra& mesh,
                                     const std::vector<AxisIrradiance>& irradiance,

@@ -10,7 +10,7 @@
 #include <set>
 #include <string>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
 #include "triangle_box.h"
@@ -91,7 +91,7 @@ struct Look {
 
 class Prober {
  public:
-  Prober(const scenes::Scene& scene, const baker::RayTracer& tracer, int rays, float insideFraction)
+  Prober(const scenes::Scene& scene, const trace::RayTracer& tracer, int rays, float insideFraction)
       : scene_(scene), tracer_(tracer), insideFraction_(insideFraction) {
     // A spherical Fibonacci set, turned off the axes so no ray runs along an axis-aligned wall.
     const int n = std::max(rays, 1);
@@ -120,8 +120,8 @@ class Prober {
   // marginReach: hits further than this along a ray cannot be the nearest surface of interest.
   Look look(glm::vec3 p, float marginReach) const {
     const size_t n = directions_.size();
-    std::vector<baker::Ray> rays(n);
-    std::vector<baker::Hit> hits(n);
+    std::vector<trace::Ray> rays(n);
+    std::vector<trace::Hit> hits(n);
     for (size_t i = 0; i < n; ++i) {
       rays[i].origin = p;
       rays[i].direction = directions_[i];
@@ -131,16 +131,16 @@ class Prober {
     size_t back = 0;
     glm::vec3 free(0.0f);
     for (size_t i = 0; i < n; ++i) {
-      baker::Hit hit = hits[i];
+      trace::Hit hit = hits[i];
       // Dynamic objects are no walls: look past them.
       for (int guard = 0; !allStatic_ && hit.valid() && guard < 16 &&
                           !scene_.instances[hit.instance].isStatic;
            ++guard) {
-        baker::Ray next = rays[i];
+        trace::Ray next = rays[i];
         next.tnear = hit.t + 1e-5f * (1.0f + hit.t);
         hit = tracer_.intersect(next);
       }
-      if (hit.valid() && !scene_.instances[hit.instance].isStatic) hit = baker::Hit();
+      if (hit.valid() && !scene_.instances[hit.instance].isStatic) hit = trace::Hit();
       const glm::vec3 d = directions_[i];
       if (!hit.valid()) {
         free += d;
@@ -165,7 +165,7 @@ class Prober {
 
  private:
   const scenes::Scene& scene_;
-  const baker::RayTracer& tracer_;
+  const trace::RayTracer& tracer_;
   float insideFraction_;
   std::vector<glm::vec3> directions_;
   bool allStatic_ = true;
@@ -497,7 +497,7 @@ float autoSpacing(const scenes::Scene& scene) {
   return niceNumber(0.25f * std::pow(size / 2.0f, 0.75f));
 }
 
-Result<Placement> placeProbes(const scenes::Scene& scene, const baker::RayTracer& tracer,
+Result<Placement> placeProbes(const scenes::Scene& scene, const trace::RayTracer& tracer,
                               const PlacementOptions& options, Progress& progress) {
   if (options.levels < 0 || options.levels > 8)
     return Result<Placement>::error(format("probe placement: levels %d is outside [0, 8]",
@@ -626,7 +626,7 @@ Result<Placement> placeProbes(const scenes::Scene& scene, const baker::RayTracer
   return placement;
 }
 
-std::vector<uint8_t> freeProbePositions(const scenes::Scene& scene, const baker::RayTracer& tracer,
+std::vector<uint8_t> freeProbePositions(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                         const std::vector<glm::vec3>& points, float margin,
                                         const PlacementOptions& options) {
   const Prober prober(scene, tracer, std::max(options.rays, 1), options.insideFraction);

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/core/parallel.h"
 
 namespace afterglow::probes {
@@ -22,8 +22,8 @@ glm::vec3 probeKindColour(ProbeKind kind) {
 glm::vec3 reflectionBoxColour() { return {0.95f, 0.85f, 0.1f}; }
 
 std::vector<glm::vec3> placementPicture(const scenes::Scene& scene,
-                                        const baker::RayTracer& tracer, const Placement& placement,
-                                        int levels, const baker::View& view, int width,
+                                        const trace::RayTracer& tracer, const Placement& placement,
+                                        int levels, const trace::View& view, int width,
                                         int height,
                                         const std::vector<ReflectionProbeEntry>& reflections) {
   std::vector<glm::vec3> image(size_t(width) * size_t(height), glm::vec3(0.02f));
@@ -31,9 +31,9 @@ std::vector<glm::vec3> placementPicture(const scenes::Scene& scene,
   // The scene: base colour under a headlight (dimmed, so the dots stand out).
   parallelFor(size_t(height), [&](size_t y) {
     for (int x = 0; x < width; ++x) {
-      const baker::Ray ray =
-          baker::cameraRay(view, width, height, float(x) + 0.5f, float(y) + 0.5f);
-      const baker::Hit hit = tracer.intersect(ray);
+      const trace::Ray ray =
+          trace::cameraRay(view, width, height, float(x) + 0.5f, float(y) + 0.5f);
+      const trace::Hit hit = tracer.intersect(ray);
       if (!hit.valid()) continue;
       const scenes::Material& m = tracer.material(hit);
       const float facing = std::abs(glm::dot(hit.geometricNormal, ray.direction));

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/trace/raytracer.h"
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/probes/placement.h"
@@ -66,7 +66,7 @@ bool contains(glm::vec3 lo, glm::vec3 hi, glm::vec3 p) {
 
 class RoomMeter {
  public:
-  RoomMeter(const scenes::Scene& scene, const baker::RayTracer& tracer, int rays,
+  RoomMeter(const scenes::Scene& scene, const trace::RayTracer& tracer, int rays,
             float insideFraction, const scenes::Bounds& bounds)
       : scene_(scene), tracer_(tracer), directions_(sphereDirections(rays)),
         insideFraction_(insideFraction), bounds_(bounds) {
@@ -75,8 +75,8 @@ class RoomMeter {
 
   Measure measure(glm::vec3 p) const {
     const size_t n = directions_.size();
-    std::vector<baker::Ray> rays(n);
-    std::vector<baker::Hit> hits(n);
+    std::vector<trace::Ray> rays(n);
+    std::vector<trace::Hit> hits(n);
     for (size_t i = 0; i < n; ++i) {
       rays[i].origin = p;
       rays[i].direction = directions_[i];
@@ -86,16 +86,16 @@ class RoomMeter {
     std::vector<float> t(n, -1.0f);  // hit distances; -1 for a miss
     size_t back = 0, front = 0;
     for (size_t i = 0; i < n; ++i) {
-      baker::Hit hit = hits[i];
+      trace::Hit hit = hits[i];
       // Dynamic objects are no walls: look past them.
       for (int guard = 0; !allStatic_ && hit.valid() && guard < 16 &&
                           !scene_.instances[hit.instance].isStatic;
            ++guard) {
-        baker::Ray next = rays[i];
+        trace::Ray next = rays[i];
         next.tnear = hit.t + 1e-5f * (1.0f + hit.t);
         hit = tracer_.intersect(next);
       }
-      if (hit.valid() && !scene_.instances[hit.instance].isStatic) hit = baker::Hit();
+      if (hit.valid() && !scene_.instances[hit.instance].isStatic) hit = trace::Hit();
       if (!hit.valid()) continue;
       if (!hit.frontFace && !tracer_.material(hit).doubleSided) ++back;
       else ++front;
@@ -146,7 +146,7 @@ class RoomMeter {
 
  private:
   const scenes::Scene& scene_;
-  const baker::RayTracer& tracer_;
+  const trace::RayTracer& tracer_;
   std::vector<glm::vec3> directions_;
   float insideFraction_;
   scenes::Bounds bounds_;
@@ -174,7 +174,7 @@ scenes::ReflectionProbe toSceneReflectionProbe(const ReflectionProbeEntry& entry
 }
 
 Result<ReflectionPlacement> placeReflectionProbes(const scenes::Scene& scene,
-                                                  const baker::RayTracer& tracer,
+                                                  const trace::RayTracer& tracer,
                                                   const ReflectionPlacementOptions& options,
                                                   Progress& progress) {
   if (!(options.spacing >= 0.0f) || !std::isfinite(options.spacing))

@@ -1,4 +1,4 @@
-// Stage 2 of the precompute: texels grouped into clusters, the nodes of the radiosity system.
+// Stage clusters: texels grouped into clusters, the nodes of the radiosity system.
 //
 // A cluster holds texels of one instance and one material within a normal cone, at most about
 // clusterSize across. Where the texels' gather rays travel short distances (corners, gaps,
@@ -19,30 +19,16 @@
 
 #include <glm/glm.hpp>
 
-#include "afterglow/baker/gather.h"
+#include "afterglow/baker/options.h"
 #include "afterglow/baker/texels.h"
+
+namespace afterglow::trace {
+class RayTracer;
+}  // namespace afterglow::trace
 
 namespace afterglow::baker {
 
-class RayTracer;
-
-struct ClusterOptions {
-  float clusterSize = 0.5f;        // metres: largest extent of a cluster
-  // ... and at most this many texels across (Unity's "cluster resolution" the other way up): a
-  // finer lightmap resolves bounced light more finely, so its radiosity nodes shrink with it.
-  float clusterTexels = 4.0f;      // texel edges (<= 0: off)
-  float maxNormalAngleDeg = 35.0f; // degrees: texels in a cluster stay within this normal cone
-  int minTexels = 1;               // count: clusters are not split below this
-  float adaptiveScale = 0.25f;     // clusters stay within this × their texels' median
-                                   //   harmonic ray distance (<= 0: off)
-  float maxDistanceRatio = 4.0f;   // texels whose ray distances differ by more are split
-                                   //   apart (<= 1: off)
-  // Far clusters (LinkOptions::farDistance), for the links of far-away hits: farLevels levels
-  // of the same clustering, each farScale times wider than the one below. 0 levels or a
-  // scale <= 1: none.
-  float farScale = 4.0f;
-  int farLevels = 1;
-};
+struct TexelGather;
 
 // The options of far cluster level `level` (1 = the first above the clusters): the clusters'
 // sizes scaled by farScale^level.
@@ -65,13 +51,6 @@ struct Clusters {
   std::vector<uint32_t> memberTexels;  //   firstTexel[c+1])
 
   uint32_t size() const { return uint32_t(area.size()); }
-  // The cluster a gather hit code (TexelGather) lands in: its texel's front cluster, or its
-  // back-side cluster; kNoTexel for a miss.
-  uint32_t ofHit(uint32_t code) const {
-    if (code == TexelGather::kNoHit) return runtime::kNoTexel;
-    const uint32_t t = code & TexelGather::kTexelMask;
-    return (code & TexelGather::kBackSide) ? texelBackCluster[t] : texelCluster[t];
-  }
 };
 
 // Groups the valid texels into clusters: front sides first, then the back sides of
@@ -79,7 +58,7 @@ struct Clusters {
 // subdivision and only backs it saw get clusters (without one, every double-sided texel's
 // back does); with a tracer, texels that a wall separates from the rest of their cluster are
 // split off. Deterministic.
-Clusters computeClusters(const scenes::Scene& scene, const RayTracer* tracer,
+Clusters computeClusters(const scenes::Scene& scene, const trace::RayTracer* tracer,
                          const TexelSet& texels, const TexelGather* gather = nullptr,
                          const ClusterOptions& options = {});
 

@@ -1,11 +1,26 @@
-// What the texels' gather rays found (transport_precompute.h traces them): the input of both
-// the clustering and the form factors.
+// Stages gather and refine: every valid texel's gather rays, traced once, before clustering.
+// What they hit decides both the texels' links and the clusters' (a front-side cluster gathers
+// exactly what its texels gather, with all their rays), and how far they travel tells the
+// clustering where light changes quickly (near corners, in gaps). TexelGather holds what they
+// found: the input of the clustering and of the links.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
+
+#include "afterglow/baker/clusters.h"
+#include "afterglow/baker/options.h"
+#include "afterglow/baker/texels.h"
+#include "afterglow/core/progress.h"
+#include "afterglow/core/status.h"
+#include "afterglow/runtime/transport.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::trace {
+class RayTracer;
+}  // namespace afterglow::trace
 
 namespace afterglow::baker {
 
@@ -68,5 +83,28 @@ struct TexelGather {
     return rays;
   }
 };
+
+// The cluster a gather hit code lands in: its texel's front cluster, or its back-side cluster;
+// kNoTexel for a miss.
+inline uint32_t clusterOfHit(const Clusters& clusters, uint32_t code) {
+  if (code == TexelGather::kNoHit) return runtime::kNoTexel;
+  const uint32_t t = code & TexelGather::kTexelMask;
+  return (code & TexelGather::kBackSide) ? clusters.texelBackCluster[t] : clusters.texelCluster[t];
+}
+
+// Traces every valid texel's gather rays, marks texels inside walls invalid (in `texels`), and
+// remaps hits on them to a valid neighbour of the same chart. Seeded from (texel, ray).
+Result<TexelGather> gatherTexels(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                                 TexelSet& texels, const LinkOptions& options,
+                                 Progress& progress = nullProgress());
+
+// After the direct light (transport's light sources): more rays for the gather points whose
+// bounced light the first rays leave uncertain (LinkOptions::refineError), appended to their
+// texels' full sets in `gather`. Per unit light, so the rays do not depend on the lights'
+// colours and intensities. Seeded from (texel, ray).
+Status refineGather(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                    const TexelSet& texels, const Clusters& clusters,
+                    const runtime::TransportData& transport, const LinkOptions& options,
+                    TexelGather& gather, Progress& progress = nullProgress());
 
 }  // namespace afterglow::baker

@@ -17,29 +17,23 @@
 
 #include <glm/glm.hpp>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/options.h"
 #include "afterglow/baker/texels.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/transport.h"
 #include "afterglow/scenes/scene.h"
+#include "afterglow/trace/camera.h"
+#include "afterglow/trace/raytracer.h"
 
 namespace afterglow::baker {
-
-class RayTracer;
 
 // What lights the scene besides its lights and emissive materials.
 struct Environment {
   glm::vec3 skySh[runtime::kShCount] = {};  // sky radiance as SH L2 (runtime::constantSkySh)
   float indirectIntensity = 1.0f;           // Unity's meaning, as in BakeOptions
   float albedoBoost = 1.0f;                 // Unity's meaning, as in BakeOptions
-};
-
-struct ReferenceOptions {
-  int samples = 1024;  // paths per texel (or per pixel for views)
-  int maxDepth = 64;   // bounces after which a path stops; Russian roulette from the third
-  int specularDepth = 1;  // referenceRadiance: specular reflections followed (reflection bounces)
 };
 
 // Per texel E/π split by how the light arrived, and the variance of each estimate (of the
@@ -54,7 +48,7 @@ struct ReferenceTexels {
 
 // Estimates the given texels (all valid texels when `which` is empty). Deterministic whatever
 // the thread count: every path is seeded from (texel, sample).
-Result<ReferenceTexels> referenceTexels(const scenes::Scene& scene, const RayTracer& tracer,
+Result<ReferenceTexels> referenceTexels(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                         const TexelSet& texels, const Environment& environment,
                                         const ReferenceOptions& options,
                                         const std::vector<uint32_t>& which = {},
@@ -67,7 +61,7 @@ struct ReferencePoints {
   std::vector<glm::vec3> irradiance;  // E/π, direct and bounced light together
   std::vector<glm::vec3> variance;    // of the mean, per channel
 };
-Result<ReferencePoints> referenceIrradiance(const scenes::Scene& scene, const RayTracer& tracer,
+Result<ReferencePoints> referenceIrradiance(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                             const Environment& environment,
                                             const std::vector<glm::vec3>& points,
                                             const std::vector<glm::vec3>& normals,
@@ -79,7 +73,7 @@ Result<ReferencePoints> referenceIrradiance(const scenes::Scene& scene, const Ra
 // sphere per point (emission plus albedo × one path's E/π at the first hit, as the camera sees
 // a bake). Seeded from (point index, sample).
 Result<std::vector<runtime::ShL2>> referenceRadianceSh(const scenes::Scene& scene,
-                                                       const RayTracer& tracer,
+                                                       const trace::RayTracer& tracer,
                                                        const Environment& environment,
                                                        const std::vector<glm::vec3>& points,
                                                        const ReferenceOptions& options,
@@ -90,11 +84,24 @@ Result<std::vector<runtime::ShL2>> referenceRadianceSh(const scenes::Scene& scen
 // colour × one path's E/π at the first hit, plus options.specularDepth sampled GGX reflections,
 // as reflection_capture.h shades with that many bounces; misses show the sky), with the
 // variance of that mean in ReferencePoints::variance. Seeded from (ray index, sample).
-Result<ReferencePoints> referenceRadiance(const scenes::Scene& scene, const RayTracer& tracer,
+Result<ReferencePoints> referenceRadiance(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                           const Environment& environment,
-                                          const std::vector<Ray>& rays,
+                                          const std::vector<trace::Ray>& rays,
                                           const ReferenceOptions& options,
                                           Progress& progress = nullProgress());
+
+// A view path-traced: every pixel of a width × height picture averages `samplesPerPixel` camera
+// rays through stratified jittered points of the pixel, each shaded as a bake is rendered
+// (emission + diffuse albedo × one path's E/π at the first hit, with the given sky and
+// intensities), so it differs from preview::renderBaked only by the bake's error and its own
+// noise. Row 0 at the top. Deterministic whatever the thread count: every sample is seeded from
+// (pixel, sample).
+Result<std::vector<glm::vec3>> renderReference(const scenes::Scene& scene,
+                                               const trace::RayTracer& tracer,
+                                               const Environment& environment,
+                                               const trace::View& view, int width, int height,
+                                               int samplesPerPixel,
+                                               Progress& progress = nullProgress());
 
 // How far a bake's texels are from the reference, as errors relative to each texel's own
 // reference value (so a dim corner counts as much as a texel next to a lamp, and a texel 100×

@@ -1,21 +1,21 @@
-// The reflection probes' capture (issue 15): one ray per cubemap texel from each probe's capture
+// Stage reflection capture: one ray per cubemap texel from each probe's capture
 // position, and what it hit kept as a runtime::ReflectionHit (runtime/reflection_capture.h), so
 // the bake and the runtime shade the cubemaps from the same records.
 #pragma once
 
 #include <vector>
 
-#include "afterglow/baker/raytracer.h"
+#include "afterglow/baker/options.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
 #include "afterglow/runtime/transport.h"
 #include "afterglow/scenes/scene.h"
 
-namespace afterglow::baker {
+namespace afterglow::trace {
+class RayTracer;
+}  // namespace afterglow::trace
 
-struct ReflectionOptions {
-  uint32_t bounces = 1;  // capture passes after the diffuse-only one (Unity's Reflection Bounces)
-};
+namespace afterglow::baker {
 
 // The influence box of a probe authored without a size: fitted to the walls around its capture
 // position by ray distances. Along each of the node's six axis directions it takes the 80th
@@ -34,7 +34,7 @@ runtime::ReflectionProbeBox fitReflectionProbeBox(const runtime::ReflectionProbe
 // Captures scene.reflectionProbes into transport.reflections (materials must be filled: a hit
 // on glTF's default material appends it when absent). Deterministic; rays on the tracer's
 // threads.
-Status captureReflectionProbes(const scenes::Scene& scene, const RayTracer& tracer,
+Status captureReflectionProbes(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                const ReflectionOptions& options,
                                runtime::TransportData& transport, Progress& progress);
 

@@ -1,5 +1,5 @@
-// Stage 1 of the precompute: the lightmap texels of every static instance, each with a world
-// position, normal and footprint, placed on the surface and moved out of nearby geometry.
+// Stage texels: the lightmap texels of every static instance, each with a world position, normal
+// and footprint, placed on the surface and moved out of nearby geometry.
 #pragma once
 
 #include <cstdint>
@@ -7,26 +7,17 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/baker/options.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"
 #include "afterglow/runtime/transport.h"
 #include "afterglow/scenes/scene.h"
 
-namespace afterglow::baker {
-
+namespace afterglow::trace {
 class RayTracer;
+}  // namespace afterglow::trace
 
-struct TexelOptions {
-  // Tangent rays cast around each sample point, 1.5 texels long, to find geometry it sits
-  // behind (the nearest back face of single-sided geometry pushes it out to that surface's
-  // front) or that cuts through its footprint (TexelSet::nearGeometry). Whether a sample is
-  // buried inside geometry is decided later, by its gather rays (gatherTexels).
-  int leakRays = 8;               // count
-  // How far a sample is pushed off its surface (self-intersection epsilon), as a fraction of
-  // the texel's world size, never below minOffset.
-  float offsetFraction = 0.05f;   // unitless
-  float minOffset = 1e-4f;        // metres
-};
+namespace afterglow::baker {
 
 // Texels as structure-of-arrays; index t is the runtime's texel index.
 struct TexelSet {
@@ -59,7 +50,7 @@ struct TexelSet {
 
 // Rasterises every static instance's TEXCOORD_1 conservatively into its atlas and places one
 // sample per covered texel. Deterministic whatever the thread count.
-Result<TexelSet> computeTexels(const scenes::Scene& scene, const RayTracer& tracer,
+Result<TexelSet> computeTexels(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                const TexelOptions& options = {},
                                Progress& progress = nullProgress());
 

@@ -65,7 +65,7 @@ struct BakeRefinement {
 // placementOptions.maxProbes probes are kept in all: the largest differences first, the rest
 // counted, with a warning in placement.warnings. Deterministic for any thread count. Errors:
 // irradiance not one per probe, a mesh of other probes.
-Result<BakeRefinement> refineByBake(const scenes::Scene& scene, const baker::RayTracer& tracer,
+Result<BakeRefinement> refineByBake(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                     const PlacementOptions& placementOptions,
                                     const runtime::ProbeTetrahedra& mesh,
                                     const std::vector<AxisIrradiance>& irradiance,

@@ -16,9 +16,9 @@
 #include "afterglow/core/status.h"
 #include "afterglow/scenes/scene.h"
 
-namespace afterglow::baker {
+namespace afterglow::trace {
 class RayTracer;
-}
+}  // namespace afterglow::trace
 
 namespace afterglow::probes {
 
@@ -61,7 +61,7 @@ float autoSpacing(const scenes::Scene& scene);
 // Deterministic for any thread count. Errors: a probe volume with a non-positive size or
 // spacing (naming its node), more probes than maxProbes (with the count and the spacing that
 // would fit), non-finite user probes.
-Result<Placement> placeProbes(const scenes::Scene& scene, const baker::RayTracer& tracer,
+Result<Placement> placeProbes(const scenes::Scene& scene, const trace::RayTracer& tracer,
                               const PlacementOptions& options = {},
                               Progress& progress = nullProgress());
 
@@ -69,7 +69,7 @@ Result<Placement> placeProbes(const scenes::Scene& scene, const baker::RayTracer
 // none moved: 1 where a probe at points[i] is clearly outside geometry (its options.rays rays see
 // back faces less often than a moved candidate may) and at least `margin` off every surface its
 // rays find, else 0. Deterministic for any thread count.
-std::vector<uint8_t> freeProbePositions(const scenes::Scene& scene, const baker::RayTracer& tracer,
+std::vector<uint8_t> freeProbePositions(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                         const std::vector<glm::vec3>& points, float margin,
                                         const PlacementOptions& options = {});
 

@@ -9,22 +9,18 @@
 
 #include <glm/glm.hpp>
 
-#include "afterglow/baker/render.h"
+#include "afterglow/trace/camera.h"
 #include "afterglow/probes/placement.h"
 #include "afterglow/probes/reflection_placement.h"
 
-namespace afterglow::baker {
-class RayTracer;
-}
-
 namespace afterglow::probes {
 
-// Linear RGB, row 0 at the top (baker::writeRenderPng writes it). Deterministic.
+// Linear RGB, row 0 at the top (preview::writeRenderPng writes it). Deterministic.
 // `levels` is the placement's refinement depth (the dots' size follows the finest spacing).
-// Written with baker::writeRenderPng at exposure 0 stops, the dots show probeKindColour.
+// Written with preview::writeRenderPng at exposure 0 stops, the dots show probeKindColour.
 std::vector<glm::vec3> placementPicture(const scenes::Scene& scene,
-                                        const baker::RayTracer& tracer, const Placement& placement,
-                                        int levels, const baker::View& view, int width,
+                                        const trace::RayTracer& tracer, const Placement& placement,
+                                        int levels, const trace::View& view, int width,
                                         int height,
                                         const std::vector<ReflectionProbeEntry>& reflections = {});
 

@@ -32,9 +32,9 @@
 #include "afterglow/core/status.h"
 #include "afterglow/scenes/scene.h"
 
-namespace afterglow::baker {
+namespace afterglow::trace {
 class RayTracer;
-}
+}  // namespace afterglow::trace
 
 namespace afterglow::probes {
 
@@ -80,7 +80,7 @@ struct ReflectionPlacement {
 
 // Errors: a non-positive or non-finite spacing, fewer than 64 rays, maxProbes 0.
 Result<ReflectionPlacement> placeReflectionProbes(const scenes::Scene& scene,
-                                                  const baker::RayTracer& tracer,
+                                                  const trace::RayTracer& tracer,
                                                   const ReflectionPlacementOptions& options = {},
                                                   Progress& progress = nullProgress());
 

@@ -1,0 +1,45 @@
+// The bake folder's layout: every file `afterglow bake` and `afterglow relight` write into OUT/,
+// named here once. Paths are relative to the folder, with '/' (as glTF URIs are).
+//
+//   scene.gltf, scene.bin           the level with TEXCOORD_1 and MOZ_lightmap materials
+//   report.json                     counts, settings, stage times, warnings
+//   transport.agt                   the transport, for the runtime and `afterglow relight`
+//   lightmaps/lightmap<i>.exr       linear half-float E/π per atlas
+//   lightmaps/lightmap<i>.png       its tone-mapped preview
+//   probes/light_probes.json        light probes: positions, kinds, tetrahedra, settings
+//   probes/light_probes_sh.bin      their radiance SH L2
+//   probes/reflection_probes.json   reflection probes: boxes, files, mips
+//   probes/reflection_sky.exr       the sky's cube map, then reflection_<i>.exr per probe
+//   probes/dfg.exr                  the split sum's DFG table
+//   probes/sky_specular_*.png       the sky for EXT_lights_image_based viewers
+#pragma once
+
+#include <string>
+
+namespace afterglow::bakefiles {
+
+constexpr const char kSceneGltf[] = "scene.gltf";
+constexpr const char kSceneBin[] = "scene.bin";
+constexpr const char kReport[] = "report.json";
+constexpr const char kTransport[] = "transport.agt";
+constexpr const char kLightmapsDir[] = "lightmaps";
+constexpr const char kProbesDir[] = "probes";
+// Within kProbesDir (light_probes.json names its SH file relative to itself).
+constexpr const char kLightProbesJson[] = "light_probes.json";
+constexpr const char kLightProbesSh[] = "light_probes_sh.bin";
+constexpr const char kReflectionProbesJson[] = "reflection_probes.json";
+constexpr const char kDfgExr[] = "dfg.exr";
+
+// "lightmaps/lightmap<atlas>.exr" and ".png".
+std::string lightmapExr(size_t atlas);
+std::string lightmapPng(size_t atlas);
+// A reflection chain's cube map within kProbesDir: "reflection_sky.exr" for chain 0 (the sky),
+// "reflection_<i>.exr" for probe i's.
+std::string reflectionExr(size_t chain);
+
+// `file` (relative to the folder) in bake folder `dir`, as a path to open.
+std::string inFolder(const std::string& dir, const std::string& file);
+// A file of kProbesDir in bake folder `dir`.
+std::string inProbes(const std::string& dir, const std::string& file);
+
+}  // namespace afterglow::bakefiles

@@ -1,0 +1,25 @@
+// Stage direct: unit direct light. One runtime::Source per light (unit colour and intensity)
+// and per emissive material (unit radiance, sampled explicitly as area lights), with texel and
+// cluster transfer and soft shadows (DirectOptions).
+#pragma once
+
+#include "afterglow/baker/clusters.h"
+#include "afterglow/baker/options.h"
+#include "afterglow/baker/texels.h"
+#include "afterglow/core/progress.h"
+#include "afterglow/core/status.h"
+#include "afterglow/runtime/transport.h"
+#include "afterglow/scenes/scene.h"
+
+namespace afterglow::trace {
+class RayTracer;
+}  // namespace afterglow::trace
+
+namespace afterglow::baker {
+
+Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                     const TexelSet& texels, const Clusters& clusters,
+                     const DirectOptions& options, runtime::TransportData& transport,
+                     Progress& progress = nullProgress());
+
+}  // namespace afterglow::baker
