@@ -28,7 +28,6 @@
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/parallel.h"
-#include "afterglow/uv/unwrap.h"
 #include "bench_accuracy_breakdown.h"
 #include "bench_common.h"
 #include "reference_cache.h"
@@ -135,16 +134,9 @@ int benchAccuracy(int argc, char** argv) {
   scenes::Scene& scene = loaded.value();
   if (singleSidedEmission)
     for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
-  uv::UnwrapOptions unwrapOptions;
-  if (atlasSize > 0) {
-    Result<float> fitted = uv::fitTexelsPerUnit(scene, unwrapOptions, atlasSize);
-    if (!fitted) return fail(fitted.message());
-    texelsPerUnit = fitted.value();
-    unwrapOptions.pack.maxAtlasSize = atlasSize;
-  }
-  unwrapOptions.pack.texelsPerUnit = texelsPerUnit > 0.0f ? texelsPerUnit : 16.0f;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrapOptions);
-  if (!unwrapped) return fail(unwrapped.message());
+  Result<float> density =
+      unwrapForBench(scene, texelsPerUnit > 0.0f ? texelsPerUnit : 16.0f, atlasSize);
+  if (!density) return fail(density.message());
 
   auto t0 = Clock::now();
   Result<baker::BakeResult> baked = baker::bake(scene, options);
@@ -164,7 +156,7 @@ int benchAccuracy(int argc, char** argv) {
   std::printf("atlas        %dx%d at %.1f texels/m, %u texels (%zu valid), %u gather points, "
               "%u clusters, %zu links\n",
               b.texels.atlases[0].width, b.texels.atlases[0].height,
-              double(unwrapOptions.pack.texelsPerUnit), b.texels.size(), valid,
+              double(density.value()), b.texels.size(), valid,
               b.transport.gatherPointCount, b.clusters.size(), b.transport.linkCount());
   std::printf("bake         %.3f s (", bakeSeconds);
   for (const baker::StageTime& s : b.stages) std::printf(" %s %.3f", baker::stageName(s.stage), s.seconds);

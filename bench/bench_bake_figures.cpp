@@ -19,7 +19,6 @@
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/memory.h"
 #include "afterglow/core/parallel.h"
-#include "afterglow/uv/unwrap.h"
 #include "bench_common.h"
 #include "shading/emitters.h"
 #include "shading/sampling.h"
@@ -179,13 +178,8 @@ int cornell(int threads, bool quick) {
   // cavity's slit (its own indirect noise is 3.6% at 65,536 paths), so the comparison would
   // measure the reference. `afterglow_bench accuracy` without --single-sided-emission shows it.
   for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
-  uv::UnwrapOptions unwrap;
-  Result<float> tpu = uv::fitTexelsPerUnit(scene, unwrap, 256);
+  Result<float> tpu = unwrapForBench(scene, 0.0f, 256);
   if (!tpu) return fail(tpu.message());
-  unwrap.pack.texelsPerUnit = tpu.value();
-  unwrap.pack.maxAtlasSize = 256;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
-  if (!unwrapped) return fail(unwrapped.message());
 
   const baker::BakeOptions options;  // the default bake
   constexpr int kRuns = 5;
@@ -257,10 +251,8 @@ int sponza(int threads) {
   Result<scenes::Scene> loaded = loadBenchScene(path);
   if (!loaded) return fail(loaded.message());
   scenes::Scene scene = std::move(loaded.value());
-  uv::UnwrapOptions unwrap;
-  unwrap.pack.texelsPerUnit = 4.0f;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
-  if (!unwrapped) return fail(unwrapped.message());
+  if (Result<float> density = unwrapForBench(scene, 4.0f); !density)
+    return fail(density.message());
   Result<baker::BakeResult> baked = baker::bake(scene, baker::BakeOptions());
   const double seconds = secondsSince(start);
   if (!baked) return fail(baked.message());

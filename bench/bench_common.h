@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 
+#include "afterglow/bakefiles/pipeline.h"
 #include "afterglow/core/status.h"
 #include "afterglow/core/timer.h"
 #include "afterglow/scenes/gltf.h"
@@ -22,6 +23,19 @@ inline Result<scenes::Scene> loadBenchScene(const std::string& path, bool textur
   if (path == "builtin:cornell") return scenes::makeCornellBox();
   if (path == "builtin:furnace") return scenes::makeFurnaceBox();
   return scenes::loadGltf(path, scenes::LoadOptions{textures});
+}
+
+// Lightmap UVs as `afterglow bake` makes them (bakefiles::unwrapForBake): at texelsPerUnit, or
+// (atlasSize > 0) at the most texels per metre that fit one atlas of that size. Returns the
+// texels per metre used.
+inline Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atlasSize = 0) {
+  bakefiles::BakeJob job;
+  job.input = scene.sourcePath;
+  job.texelsPerUnit = texelsPerUnit;
+  job.atlasSize = atlasSize;
+  Result<bakefiles::UnwrapStep> step = bakefiles::unwrapForBake(scene, job);
+  if (!step) return step.status();
+  return step->texelsPerUnit;
 }
 
 const char* mark(bool ok);

@@ -16,7 +16,6 @@
 #include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/runtime/transport_file.h"
-#include "afterglow/uv/unwrap.h"
 #include "bench_common.h"
 
 namespace afterglow::bench {
@@ -45,10 +44,8 @@ int benchProbes(int argc, char** argv) {
   Result<scenes::Scene> loaded = loadBenchScene(path);
   if (!loaded) return fail(loaded.message());
   scenes::Scene scene = std::move(loaded.value());
-  uv::UnwrapOptions unwrap;
-  unwrap.pack.texelsPerUnit = texelsPerUnit;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
-  if (!unwrapped) return fail(unwrapped.message());
+  if (Result<float> density = unwrapForBench(scene, texelsPerUnit); !density)
+    return fail(density.message());
 
   // Placement as `afterglow bake` does it by default: its own ray tracer, then the tetrahedra.
   auto t0 = Clock::now();

@@ -16,7 +16,6 @@
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/runtime/transport_file.h"
-#include "afterglow/uv/unwrap.h"
 #include "bench_common.h"
 
 namespace afterglow::bench {
@@ -27,10 +26,8 @@ int reflectionBakeFigures(const std::string& path, float texelsPerUnit, int thre
   Result<scenes::Scene> loaded = loadBenchScene(path);
   if (!loaded) return fail(loaded.message());
   scenes::Scene scene = std::move(loaded.value());
-  uv::UnwrapOptions unwrap;
-  unwrap.pack.texelsPerUnit = texelsPerUnit;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
-  if (!unwrapped) return fail(unwrapped.message());
+  if (Result<float> density = unwrapForBench(scene, texelsPerUnit); !density)
+    return fail(density.message());
   const scenes::Bounds bounds = scene.bounds();
   const glm::vec3 size = bounds.size();
   const int longAxis = size.x >= size.z ? 0 : 2;

@@ -20,7 +20,6 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/runtime/transport_file.h"
-#include "afterglow/uv/unwrap.h"
 #include "bench_common.h"
 
 namespace fs = std::filesystem;
@@ -42,16 +41,8 @@ double bestMs(int repeat, F&& f) {
 
 int measure(const char* label, scenes::Scene scene, float texelsPerUnit, int atlasSize,
             int repeat, double bounceTargetMs) {
-  uv::UnwrapOptions unwrap;
-  if (atlasSize > 0) {
-    Result<float> fitted = uv::fitTexelsPerUnit(scene, unwrap, atlasSize);
-    if (!fitted) return fail(fitted.message());
-    texelsPerUnit = fitted.value();
-    unwrap.pack.maxAtlasSize = atlasSize;
-  }
-  unwrap.pack.texelsPerUnit = texelsPerUnit;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
-  if (!unwrapped) return fail(unwrapped.message());
+  Result<float> density = unwrapForBench(scene, texelsPerUnit, atlasSize);
+  if (!density) return fail(density.message());
   setThreadCount(2);  // the bake may use both cores; the runtime below runs on one
   Result<baker::BakeResult> baked = baker::bake(scene, baker::BakeOptions());
   if (!baked) return fail(baked.message());

@@ -6,7 +6,7 @@
 
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
-#include "afterglow/uv/unwrap.h"
+#include "afterglow/bakefiles/pipeline.h"
 #include "test_util.h"
 
 namespace afterglow::baker {
@@ -21,10 +21,18 @@ BakeOptions draftOptions() {
 }
 
 void unwrapAt(scenes::Scene& scene, float texelsPerUnit) {
-  uv::UnwrapOptions u;
-  u.pack.texelsPerUnit = texelsPerUnit;
-  Result<uv::UnwrapResult> r = uv::unwrap(scene, u);
+  bakefiles::BakeJob job;
+  job.texelsPerUnit = texelsPerUnit;
+  Result<bakefiles::UnwrapStep> r = bakefiles::unwrapForBake(scene, job);
   ASSERT_TRUE(r) << r.message();
+}
+
+Result<bakefiles::UnwrapStep> unwrapIntoAtlas(scenes::Scene& scene, int atlasSize) {
+  bakefiles::BakeJob job;
+  job.atlasSize = atlasSize;
+  Result<bakefiles::UnwrapStep> r = bakefiles::unwrapForBake(scene, job);
+  EXPECT_TRUE(r) << r.message();
+  return r;
 }
 
 BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
@@ -145,16 +153,9 @@ scenes::Scene cornellForAccuracy(const std::string& path) {
   if (!loaded) return {};
   scenes::Scene scene = std::move(loaded.value());
   for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
-  uv::UnwrapOptions unwrap;
-  Result<float> density = uv::fitTexelsPerUnit(scene, unwrap, 256);
-  EXPECT_TRUE(density) << density.message();
-  if (!density) return {};
-  unwrap.pack.texelsPerUnit = density.value();
-  unwrap.pack.maxAtlasSize = 256;
-  Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, unwrap);
-  EXPECT_TRUE(unwrapped) << unwrapped.message();
+  Result<bakefiles::UnwrapStep> unwrapped = unwrapIntoAtlas(scene, 256);
   if (!unwrapped) return {};
-  EXPECT_EQ(unwrapped->metrics.atlases.size(), 1u);
+  EXPECT_EQ(unwrapped->atlases, 1u);
   return scene;
 }
 

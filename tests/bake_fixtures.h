@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "afterglow/bakefiles/pipeline.h"
 #include "afterglow/baker/bake.h"
 #include "afterglow/scenes/scene.h"
 
@@ -12,8 +13,12 @@ namespace afterglow::baker {
 
 // Few rays and samples: tests that need precision raise what they need.
 BakeOptions draftOptions();
-// Lightmap UVs at this many texels per unit (a test failure when unwrapping fails).
+// Lightmap UVs as `afterglow bake` makes them (bakefiles::unwrapForBake) at this many texels
+// per unit (a test failure when unwrapping fails).
 void unwrapAt(scenes::Scene& scene, float texelsPerUnit);
+// ... or at the most texels per unit that fit one atlasSize² atlas (a test failure when
+// unwrapping fails).
+Result<bakefiles::UnwrapStep> unwrapIntoAtlas(scenes::Scene& scene, int atlasSize);
 // The bake's result, or an empty one and a test failure.
 BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options);
 // A horizontal square of side 2 × halfSize at y = 0, facing +Y, of one material (a dielectric,

@@ -16,7 +16,7 @@
 #include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/scenes/gltf.h"
-#include "afterglow/uv/unwrap.h"
+#include "bake_fixtures.h"
 #include "test_util.h"
 
 namespace afterglow::baker {
@@ -33,12 +33,7 @@ scenes::Scene loadSmall(const std::string& path, int atlasSize) {
   EXPECT_TRUE(loaded) << loaded.message();
   if (!loaded) return {};
   scenes::Scene scene = std::move(loaded.value());
-  uv::UnwrapOptions unwrap;
-  Result<float> density = uv::fitTexelsPerUnit(scene, unwrap, atlasSize);
-  EXPECT_TRUE(density) << density.message();
-  unwrap.pack.texelsPerUnit = density ? density.value() : 1.0f;
-  unwrap.pack.maxAtlasSize = atlasSize;
-  EXPECT_TRUE(uv::unwrap(scene, unwrap));
+  unwrapIntoAtlas(scene, atlasSize);
   return scene;
 }
 
@@ -46,12 +41,6 @@ BakeOptions fastOptions() {
   BakeOptions o = bakePreset(Quality::Draft);
   o.direct.penumbraSamples = 16;
   return o;
-}
-
-BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
-  Result<BakeResult> r = bake(scene, options);
-  EXPECT_TRUE(r) << r.message();
-  return r ? std::move(r.value()) : BakeResult{};
 }
 
 // The largest per-channel difference between atlases and a bake's lightmaps, relative to the

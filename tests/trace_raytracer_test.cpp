@@ -17,7 +17,7 @@
 #include "afterglow/scenes/procedural.h"
 #include "test_util.h"
 
-namespace afterglow::baker {
+namespace afterglow::trace {
 namespace {
 
 using scenes::Scene;
@@ -637,4 +637,4 @@ TEST(BakerRayTracer, SponzaBuildsAllInstancedTrianglesWithCutouts) {
 }
 
 }  // namespace
-}  // namespace afterglow::baker
+}  // namespace afterglow::trace
