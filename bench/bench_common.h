@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <string>
 
-#include "afterglow/bakefiles/pipeline.h"
 #include "afterglow/core/status.h"
 #include "afterglow/core/timer.h"
 #include "afterglow/scenes/gltf.h"
@@ -28,15 +27,7 @@ inline Result<scenes::Scene> loadBenchScene(const std::string& path, bool textur
 // Lightmap UVs as `afterglow bake` makes them (bakefiles::unwrapForBake): at texelsPerUnit, or
 // (atlasSize > 0) at the most texels per metre that fit one atlas of that size. Returns the
 // texels per metre used.
-inline Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atlasSize = 0) {
-  bakefiles::BakeJob job;
-  job.input = scene.sourcePath;
-  job.texelsPerUnit = texelsPerUnit;
-  job.atlasSize = atlasSize;
-  Result<bakefiles::UnwrapStep> step = bakefiles::unwrapForBake(scene, job);
-  if (!step) return step.status();
-  return step->texelsPerUnit;
-}
+Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atlasSize = 0);
 
 const char* mark(bool ok);
 

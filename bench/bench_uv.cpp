@@ -49,8 +49,6 @@ bool identical(const scenes::Scene& a, const scenes::Scene& b) {
 
 }  // namespace
 
-const char* mark(bool ok) { return ok ? "ok" : "MISSED"; }
-
 int benchUv(int argc, char** argv) {
   std::string scenePath = std::string(AFTERGLOW_SHARED_DIR) + "/scenes/sponza/Sponza.gltf";
   float texelsPerUnit = 16.0f;

@@ -5,7 +5,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "afterglow/bakefiles/pipeline.h"
 #include "afterglow/baker/bake.h"
 #include "afterglow/scenes/scene.h"
 
@@ -16,9 +15,9 @@ BakeOptions draftOptions();
 // Lightmap UVs as `afterglow bake` makes them (bakefiles::unwrapForBake) at this many texels
 // per unit (a test failure when unwrapping fails).
 void unwrapAt(scenes::Scene& scene, float texelsPerUnit);
-// ... or at the most texels per unit that fit one atlasSize² atlas (a test failure when
-// unwrapping fails).
-Result<bakefiles::UnwrapStep> unwrapIntoAtlas(scenes::Scene& scene, int atlasSize);
+// ... or at the most texels per unit that fit one atlasSize² atlas; returns the atlases made (0
+// and a test failure when unwrapping fails).
+size_t unwrapIntoAtlas(scenes::Scene& scene, int atlasSize);
 // The bake's result, or an empty one and a test failure.
 BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options);
 // A horizontal square of side 2 × halfSize at y = 0, facing +Y, of one material (a dielectric,
