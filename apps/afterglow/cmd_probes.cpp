@@ -109,22 +109,17 @@ const char kProbesHelp[] =
 namespace {
 
 int runPlace(int argc, char** argv, int first) {
-  auto usage = [](const std::string& message) {
-    printError("probes place: " + message + " (see afterglow probes --help)");
-    return int(kExitUsage);
-  };
+  const Command command = {"probes place", "probes", kProbesHelp};
+  auto usage = [&](const std::string& message) { return command.usage(message); };
   Args args;
-  if (!args.parse(argc, argv, first,
-                  {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"},
-                   {"add"}, {"bake"}, {"refine-threshold"}, {"width"}, {"height"},
-                   {"threads"}, {"reflection", 0, false}, {"max-reflection-probes"},
-                   {"quiet", 0, false},
-                   {"help", 'h', false}}))
-    return usage(args.error());
-  if (args.has("help")) {
-    std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
-    return kExitOk;
-  }
+  if (std::optional<int> stop = parseOrExit(
+          args, argc, argv, first,
+          {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"}, {"add"},
+           {"bake"}, {"refine-threshold"}, {"width"}, {"height"}, {"threads"},
+           {"reflection", 0, false}, {"max-reflection-probes"}, {"quiet", 0, false},
+           {"help", 'h', false}},
+          command))
+    return *stop;
   std::string input;
   if (!args.single("SCENE", &input)) return usage(args.error());
   if (!args.has("output")) return usage("missing -o PROBES.json");
@@ -175,13 +170,9 @@ int runPlace(int argc, char** argv, int first) {
     options.userNames = user->names;
   }
 
-  bool badArgument = false;
-  Result<scenes::Scene> loaded = loadSceneArgument(input, false, &badArgument);
-  if (interrupted()) return interruptedExit();
-  if (!loaded) {
-    printError(loaded.message());
-    return badArgument ? kExitUsage : kExitBadInput;
-  }
+  int code = kExitOk;
+  Result<scenes::Scene> loaded = loadSceneOrExit(input, false, &code);
+  if (!loaded) return code;
   const scenes::Scene& scene = loaded.value();
   Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   if (!tracer) {
@@ -401,7 +392,7 @@ int runProbes(int argc, char** argv, int first) {
   if (verb == "place") return runPlace(argc, argv, first + 1);
   if (verb == "sample") return runProbesSample(argc, argv, first + 1);
   if (verb == "-h" || verb == "--help" || verb == "help") {
-    std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
+    printHelp(kProbesHelp);
     return kExitOk;
   }
   printError(verb.empty() ? "probes: missing a verb: place or sample (see afterglow probes --help)"

@@ -239,16 +239,11 @@ MaterialMap mapMaterials(const json& gltf, int transportMaterials) {
 }  // namespace
 
 int runRelight(int argc, char** argv, int first) {
-  auto usage = [](const std::string& message) {
-    printError("relight: " + message + " (see afterglow relight --help)");
-    return int(kExitUsage);
-  };
+  const Command command = {"relight", "relight", kRelightHelp};
+  auto usage = [&](const std::string& message) { return command.usage(message); };
   Args args;
-  if (!args.parse(argc, argv, first, kRelightOptions)) return usage(args.error());
-  if (args.has("help")) {
-    std::printf("%s\n%s", kRelightHelp, kExitCodesHelp);
-    return kExitOk;
-  }
+  if (std::optional<int> stop = parseOrExit(args, argc, argv, first, kRelightOptions, command))
+    return *stop;
   if (args.positional().size() != 1) return usage("give one bake folder OUT/");
   if (!args.has("output")) return usage("-o RELIT/ is required");
   const fs::path in = args.positional()[0];
