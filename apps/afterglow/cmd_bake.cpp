@@ -1,5 +1,6 @@
 // afterglow bake: UVs, the precompute and one solve, written as lightmaps + glTF + report.
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -222,31 +223,26 @@ void printSummary(const bakefiles::BakedLevel& level, double writeSeconds,
 }  // namespace
 
 int runBake(int argc, char** argv, int first) {
-  auto usage = [](const std::string& message) {
-    printError("bake: " + message + " (see afterglow bake --help)");
-    return int(kExitUsage);
-  };
+  const Command command = {"bake", "bake", kBakeHelp};
   Args args;
-  if (!args.parse(argc, argv, first, kBakeOptions)) return usage(args.error());
-  if (args.has("help")) {
-    std::printf("%s\n%s", kBakeHelp, kExitCodesHelp);
-    return kExitOk;
-  }
+  if (std::optional<int> stop = parseOrExit(args, argc, argv, first, kBakeOptions, command))
+    return *stop;
   if (args.has("settings")) {
     std::vector<std::string> merged;
     std::string error;
-    if (!settingsArguments(args.get("settings"), &merged, &error)) return usage(error);
+    if (!settingsArguments(args.get("settings"), &merged, &error)) return command.usage(error);
     for (int i = first; i < argc; ++i) merged.push_back(argv[i]);
     std::vector<char*> mergedArgv;
     for (std::string& s : merged) mergedArgv.push_back(s.data());
     Args withSettings;
     if (!withSettings.parse(int(mergedArgv.size()), mergedArgv.data(), 0, kBakeOptions))
-      return usage(withSettings.error() + " (in " + args.get("settings") + " or the command line)");
+      return command.usage(withSettings.error() + " (in " + args.get("settings") +
+                           " or the command line)");
     args = withSettings;
   }
   std::string input;
-  if (!args.single("SCENE", &input)) return usage(args.error());
-  if (!args.has("output")) return usage("missing -o OUT/");
+  if (!args.single("SCENE", &input)) return command.usage(args.error());
+  if (!args.has("output")) return command.usage("missing -o OUT/");
   const std::string outDir = args.get("output");
 
   bakefiles::BakeJob job;
@@ -255,14 +251,14 @@ int runBake(int argc, char** argv, int first) {
   job.quality = args.get("quality", "default");
   baker::Quality preset;
   if (!qualityFor(job.quality, &preset))
-    return usage("--quality wants draft, default or high, got '" + job.quality + "'");
+    return command.usage("--quality wants draft, default or high, got '" + job.quality + "'");
   baker::BakeOptions& options = job.bake;
   options = baker::bakePreset(preset);
   int threads = 0, maxProbes = int(job.maxProbes), reflectionBounces = 1;
   const std::string density = args.get("texels-per-unit", "auto");
   if (density != "auto" &&
       !args.getFloat("texels-per-unit", 0.0f, 1e-3f, 1e5f, &job.texelsPerUnit))
-    return usage(args.error() + " (or 'auto')");
+    return command.usage(args.error() + " (or 'auto')");
   if (!args.getInt("atlas-size", 0, 16, 16384, &job.atlasSize) ||
       !args.getInt("texel-rays", options.links.texelRays, 1, 1 << 20, &options.links.texelRays) ||
       !args.getInt("cluster-rays", options.links.clusterRays, 1, 1 << 20,
@@ -296,19 +292,20 @@ int runBake(int argc, char** argv, int first) {
       !args.getInt("max-probes", maxProbes, 1, 100000000, &maxProbes) ||
       !args.getFloat("probe-dering", 0.0f, 0.0f, 1e6f, &job.probeDering) ||
       !args.getInt("reflection-bounces", 1, 0, 64, &reflectionBounces))
-    return usage(args.error());
+    return command.usage(args.error());
   options.reflections.bounces = uint32_t(reflectionBounces);
   job.maxProbes = size_t(maxProbes);
   job.probes = args.get("probes", "auto");
   if (job.atlasSize > 0 && job.texelsPerUnit > 0.0f)
-    return usage("give --texels-per-unit or --atlas-size, not both");
+    return command.usage("give --texels-per-unit or --atlas-size, not both");
   options.reference = args.has("reference");
   if (args.has("sky") && !parseVec3(args.get("sky"), &options.skyColor))
-    return usage("--sky wants r,g,b, got '" + args.get("sky") + "'");
+    return command.usage("--sky wants r,g,b, got '" + args.get("sky") + "'");
   options.skyImage = args.get("sky-image");
   const std::string mode = args.get("uv", "generate");
   if (mode == "keep") job.unwrap.mode = uv::UvMode::Keep;
-  else if (mode != "generate") return usage("--uv wants generate or keep, got '" + mode + "'");
+  else if (mode != "generate")
+    return command.usage("--uv wants generate or keep, got '" + mode + "'");
   job.overBudget = args.has("yes");
   job.singleSidedEmission = args.has("single-sided-emission");
   const bool quiet = args.has("quiet");
@@ -317,14 +314,10 @@ int runBake(int argc, char** argv, int first) {
   ConsoleProgress progress(stderr, quiet);
   InterruptGuard guard(progress);
   auto t0 = Clock::now();
-  bool badArgument = false;
-  Result<scenes::Scene> loaded = loadSceneArgument(input, true, &badArgument);
+  int code = kExitOk;
+  Result<scenes::Scene> loaded = loadSceneOrExit(input, true, &code);
   const double loadSeconds = secondsSince(t0);
-  if (interrupted()) return interruptedExit();
-  if (!loaded) {
-    printError(loaded.message());
-    return badArgument ? kExitUsage : kExitBadInput;
-  }
+  if (!loaded) return code;
   scenes::Scene& scene = loaded.value();
   if (job.singleSidedEmission)
     for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;

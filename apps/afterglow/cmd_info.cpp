@@ -1,6 +1,7 @@
 // afterglow info: what afterglow makes of a scene, so a user can check a level before baking.
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -162,30 +163,17 @@ void printScene(const std::string& input, const scenes::Scene& scene) {
 }  // namespace
 
 int runInfo(int argc, char** argv, int first) {
+  const Command command = {"info", "info", kInfoHelp};
   Args args;
-  if (!args.parse(argc, argv, first, {{"no-textures", 0, false}, {"help", 'h', false}})) {
-    printError("info: " + args.error() + " (see afterglow info --help)");
-    return kExitUsage;
-  }
-  if (args.has("help")) {
-    std::printf("%s\n%s", kInfoHelp, kExitCodesHelp);
-    return kExitOk;
-  }
-  if (args.positional().size() != 1) {
-    printError(std::string("info: ") +
-               (args.positional().empty() ? "missing SCENE" : "one SCENE only") +
-               " (see afterglow info --help)");
-    return kExitUsage;
-  }
+  if (std::optional<int> stop = parseOrExit(
+          args, argc, argv, first, {{"no-textures", 0, false}, {"help", 'h', false}}, command))
+    return *stop;
+  if (args.positional().size() != 1)
+    return command.usage(args.positional().empty() ? "missing SCENE" : "one SCENE only");
   const std::string input = args.positional()[0];
-  bool badArgument = false;
-  Result<scenes::Scene> loaded = loadSceneArgument(input, !args.has("no-textures"), &badArgument);
-  // Loading a large level can take a while; a Ctrl-C during it stops here, before any output.
-  if (interrupted()) return interruptedExit();
-  if (!loaded) {
-    printError(loaded.message());
-    return badArgument ? kExitUsage : kExitBadInput;
-  }
+  int code = kExitOk;
+  Result<scenes::Scene> loaded = loadSceneOrExit(input, !args.has("no-textures"), &code);
+  if (!loaded) return code;
   printScene(input, loaded.value());
   return kExitOk;
 }

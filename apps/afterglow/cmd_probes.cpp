@@ -1,32 +1,22 @@
-// `afterglow probes place`: light-probe placement (probes::placeProbes), refined where a bake's
-// light changes with --bake (probes::refineByBake), their tetrahedra (probes::tetrahedralize),
-// written as PROBES.json with a picture beside it; with --reflection, reflection probes proposed
-// one per room-like region (probes::placeReflectionProbes) in the same file. `probes sample` is in cmd_probes_sample.cpp.
-#include <chrono>
-#include <cmath>
+// `afterglow probes place`: the command line into a probes::PlacementJob (placement_job.h:
+// light probes placed, refined where a bake's light changes with --bake, tetrahedralised,
+// reflection probes proposed with --reflection), the bake's light read through
+// bakefiles::BakedProbes, and PROBES.json written with a picture beside it. `probes sample` is
+// in cmd_probes_sample.cpp.
 #include <cstdio>
 #include <filesystem>
-#include <limits>
-#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "afterglow/trace/raytracer.h"
-#include "afterglow/preview/render.h"
+#include "afterglow/bakefiles/read.h"
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/core/progress.h"
-#include "afterglow/probes/bake_refinement.h"
-#include "afterglow/probes/placement.h"
-#include "afterglow/probes/placement_picture.h"
+#include "afterglow/preview/render.h"
+#include "afterglow/probes/placement_job.h"
 #include "afterglow/probes/probes_file.h"
-#include "afterglow/probes/reflection_placement.h"
-#include "afterglow/probes/tetrahedralize.h"
 #include "args.h"
-#include "afterglow/bakefiles/read.h"
 #include "commands.h"
 #include "common.h"
 
@@ -108,289 +98,190 @@ const char kProbesHelp[] =
 
 namespace {
 
-int runPlace(int argc, char** argv, int first) {
-  auto usage = [](const std::string& message) {
-    printError("probes place: " + message + " (see afterglow probes --help)");
-    return int(kExitUsage);
-  };
-  Args args;
-  if (!args.parse(argc, argv, first,
-                  {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"},
-                   {"add"}, {"bake"}, {"refine-threshold"}, {"width"}, {"height"},
-                   {"threads"}, {"reflection", 0, false}, {"max-reflection-probes"},
-                   {"quiet", 0, false},
-                   {"help", 'h', false}}))
-    return usage(args.error());
-  if (args.has("help")) {
-    std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
-    return kExitOk;
-  }
-  std::string input;
-  if (!args.single("SCENE", &input)) return usage(args.error());
-  if (!args.has("output")) return usage("missing -o PROBES.json");
-  const std::string output = args.get("output");
-  if (!endsWith(output, ".json"))
-    return usage("the output must end in .json, got '" + output + "'");
+const Command kPlace = {"probes place", "probes", kProbesHelp};
 
-  probes::PlacementOptions options;
-  probes::BakeRefinementOptions refineOptions;
-  probes::ReflectionPlacementOptions reflectionOptions;
-  int threads = 0, width = 960, height = 600, maxProbes = int(options.maxProbes);
-  int maxReflection = int(reflectionOptions.maxProbes);
+// The job and the output from the command line: the usage error's exit code (printed) when
+// they are wrong.
+std::optional<int> parsePlacement(Args& args, probes::PlacementJob* job, std::string* output,
+                                  int* threads) {
+  if (!args.single("SCENE", &job->input)) return kPlace.usage(args.error());
+  if (!args.has("output")) return kPlace.usage("missing -o PROBES.json");
+  *output = args.get("output");
+  if (!endsWith(*output, ".json"))
+    return kPlace.usage("the output must end in .json, got '" + *output + "'");
+  probes::PlacementOptions& options = job->placement;
+  int maxProbes = int(options.maxProbes);
+  int maxReflection = int(job->reflectionOptions.maxProbes);
   if (!args.getFloat("spacing", 0.0f, 0.0f, 1e6f, &options.spacing) ||
       !args.getInt("levels", options.levels, 0, 8, &options.levels) ||
       !args.getFloat("margin", 0.0f, -1e-30f, 1e6f, &options.margin) ||
       !args.getInt("max-probes", maxProbes, 1, 100000000, &maxProbes) ||
-      !args.getInt("width", width, 16, 8192, &width) ||
-      !args.getInt("height", height, 16, 8192, &height) ||
-      !args.getInt("threads", 0, 0, 1024, &threads) ||
+      !args.getInt("width", job->width, 16, 8192, &job->width) ||
+      !args.getInt("height", job->height, 16, 8192, &job->height) ||
+      !args.getInt("threads", 0, 0, 1024, threads) ||
       !args.getInt("max-reflection-probes", maxReflection, 1, 4096, &maxReflection) ||
-      !args.getFloat("refine-threshold", refineOptions.threshold, 0.0f, 1e6f,
-                     &refineOptions.threshold))
-    return usage(args.error());
-  const std::string bakeDir = args.get("bake");
-  if (args.has("bake") && bakeDir.empty()) return usage("--bake wants a bake folder OUT/");
-  if (args.has("refine-threshold") && bakeDir.empty())
-    return usage("--refine-threshold refines by a bake: give --bake OUT/ too");
+      !args.getFloat("refine-threshold", job->refinement.threshold, 0.0f, 1e6f,
+                     &job->refinement.threshold))
+    return kPlace.usage(args.error());
+  job->bake = args.get("bake");
+  if (args.has("bake") && job->bake.empty())
+    return kPlace.usage("--bake wants a bake folder OUT/");
+  if (args.has("refine-threshold") && job->bake.empty())
+    return kPlace.usage("--refine-threshold refines by a bake: give --bake OUT/ too");
   options.maxProbes = size_t(maxProbes);
-  const bool reflection = args.has("reflection");
-  if (args.has("max-reflection-probes") && !reflection)
-    return usage("--max-reflection-probes limits the proposals of --reflection: give it too");
-  reflectionOptions.maxProbes = size_t(maxReflection);
+  job->reflection = args.has("reflection");
+  if (args.has("max-reflection-probes") && !job->reflection)
+    return kPlace.usage(
+        "--max-reflection-probes limits the proposals of --reflection: give it too");
+  job->reflectionOptions.maxProbes = size_t(maxReflection);
+  job->userProbesFile = args.get("add");
+  return std::nullopt;
+}
+
+// --add's probes into the job, pinned; false with the error printed.
+bool addUserProbes(probes::PlacementJob* job) {
+  Result<probes::UserProbes> user = probes::readUserProbes(job->userProbesFile);
+  if (!user) {
+    printError(user.message());
+    return false;
+  }
+  job->placement.userProbes = user->positions;
+  job->placement.userNames = user->names;
+  return true;
+}
+
+// --bake's light probes, solved as the bake solved them: the exit code to stop with on an
+// error (printed) or a Ctrl-C.
+std::optional<int> loadBake(probes::PlacementJob* job, std::optional<bakefiles::BakedProbes>* out) {
+  const auto start = Clock::now();
+  Result<bakefiles::BakedProbes> loaded = bakefiles::loadBakedProbes(job->bake);
+  if (interrupted()) return interruptedExit();
+  if (!loaded) {
+    printError(loaded.message());
+    return kExitBadInput;
+  }
+  *out = std::move(loaded.value());
+  job->bakeLoadSeconds = secondsSince(start);
+  return std::nullopt;
+}
+
+// PROBES.json and the picture beside it, both through temporaries, renamed only once both are
+// written.
+int writePlacement(const probes::PlacementJob& job, const probes::PlacedProbes& placed,
+                   const std::string& output, const std::string& picturePath) {
+  AtomicOutput files;
+  Status st = files.write(output, placed.probesJson);
+  if (st)
+    st = preview::writeRenderPng(files.tempPath(picturePath), job.width, job.height,
+                                 placed.picture, 0.0f);
+  if (!st) {
+    printError(st.message());
+    return kExitOutput;
+  }
+  if (interrupted()) return interruptedExit();
+  if (st = files.commit(); !st) {
+    printError(st.message());
+    return kExitOutput;
+  }
+  return kExitOk;
+}
+
+void printPlacement(const probes::PlacementJob& job, const probes::PlacedProbes& placed,
+                    const scenes::Scene& scene, const std::string& output,
+                    const std::string& picturePath) {
+  const probes::Placement& placement = placed.placement;
+  const probes::BakeRefinement& refinement = placed.refinement;
+  const probes::ReflectionPlacement& reflections = placed.reflections;
+  const bool baked = !job.bake.empty();
+  std::printf("scene         %s\n", job.input.c_str());
+  std::printf("spacing       %.3g m%s, %d finer levels, margin %.3g m\n",
+              double(placement.spacing),
+              job.placement.spacing > 0.0f ? "" : " (from the level's size)",
+              job.placement.levels, double(placement.margin));
+  std::printf("candidates    %zu\n", placement.candidates);
+  std::printf("placed        %zu (%zu refined,%s %zu moved, %zu pinned)\n",
+              placement.positions.size(), placement.refined,
+              baked ? format(" %zu by the bake,", refinement.added).c_str() : "",
+              placement.moved, placed.pinned);
+  std::printf("rejected      %zu inside geometry\n", placement.rejected);
+  if (baked)
+    std::printf("bake          %zu probes added: %zu of %zu edges differ by more than %.3g in "
+                "%s (%zu at the finest spacing already); %zu midpoints near geometry or on a "
+                "probe, %zu over the budget\n",
+                refinement.added, refinement.overThreshold, refinement.edges,
+                double(job.refinement.threshold), job.bake.c_str(), refinement.shortEdges,
+                refinement.rejected, refinement.overBudget);
+  std::printf("tetrahedra    %zu\n", placed.mesh.tetrahedra.size());
+  if (job.reflection)
+    std::printf("reflection    %zu reflection probe%s proposed, from %zu candidates at %.3g m "
+                "(%zu inside geometry, %zu open, %zu thin, %zu with the box's centre in "
+                "geometry, %zu in a kept box, %zu over the budget)\n",
+                reflections.probes.size(), reflections.probes.size() == 1 ? "" : "s",
+                reflections.candidates, double(reflections.spacing), reflections.inside,
+                reflections.open, reflections.thin, reflections.centreBlocked,
+                reflections.overlapping, reflections.overBudget);
+  std::printf("time          place %.2f s,%s%s tetrahedra %.2f s\n", placed.placeSeconds,
+              baked ? format(" bake refinement %.2f s,", placed.bakeSeconds).c_str() : "",
+              job.reflection
+                  ? format(" reflection probes %.2f s,", placed.reflectionSeconds).c_str()
+                  : "",
+              placed.tetrahedraSeconds);
+  for (const std::vector<std::string>* warnings :
+       {&scene.warnings, &placement.warnings, &reflections.warnings})
+    for (const std::string& w : *warnings) std::printf("warning       %s\n", w.c_str());
+  std::printf("wrote         %s, %s\n", output.c_str(), picturePath.c_str());
+}
+
+int runPlace(int argc, char** argv, int first) {
+  Args args;
+  if (std::optional<int> stop = parseOrExit(
+          args, argc, argv, first,
+          {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"}, {"add"},
+           {"bake"}, {"refine-threshold"}, {"width"}, {"height"}, {"threads"},
+           {"reflection", 0, false}, {"max-reflection-probes"}, {"quiet", 0, false},
+           {"help", 'h', false}},
+          kPlace))
+    return *stop;
+  probes::PlacementJob job;
+  std::string output;
+  int threads = 0;
+  if (std::optional<int> stop = parsePlacement(args, &job, &output, &threads)) return *stop;
   const bool quiet = args.has("quiet");
   setThreadCount(threads);
 
   ConsoleProgress progress(stderr, quiet);
   InterruptGuard guard(progress);
   const auto start = Clock::now();
-
-  std::vector<std::string> userNames;
-  if (args.has("add")) {
-    Result<probes::UserProbes> user = probes::readUserProbes(args.get("add"));
-    if (!user) {
-      printError(user.message());
-      return kExitBadInput;
-    }
-    options.userProbes = user->positions;
-    options.userNames = user->names;
-  }
-
-  bool badArgument = false;
-  Result<scenes::Scene> loaded = loadSceneArgument(input, false, &badArgument);
-  if (interrupted()) return interruptedExit();
-  if (!loaded) {
-    printError(loaded.message());
-    return badArgument ? kExitUsage : kExitBadInput;
-  }
-  const scenes::Scene& scene = loaded.value();
-  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
-  if (!tracer) {
-    printError(input + ": " + tracer.message());
-    return kExitBadInput;
-  }
-
+  if (args.has("add") && !addUserProbes(&job)) return kExitBadInput;
+  int code = kExitOk;
+  Result<scenes::Scene> loaded = loadSceneOrExit(job.input, false, &code);
+  if (!loaded) return code;
+  job.loadSeconds = secondsSince(start);
   // The bake first, so a wrong folder fails before the placement's work.
   std::optional<bakefiles::BakedProbes> baked;
-  double bakeSeconds = 0.0;
-  if (!bakeDir.empty()) {
-    const auto bakeStart = Clock::now();
-    Result<bakefiles::BakedProbes> loadedBake = bakefiles::loadBakedProbes(bakeDir);
-    if (interrupted()) return interruptedExit();
-    if (!loadedBake) {
-      printError(loadedBake.message());
-      return kExitBadInput;
-    }
-    baked = std::move(loadedBake.value());
-    bakeSeconds = secondsSince(bakeStart);
-  }
+  if (!job.bake.empty())
+    if (std::optional<int> stop = loadBake(&job, &baked)) return *stop;
+  // The bake's probes at the points in order, each walk starting from the last one's
+  // tetrahedron: the same answer on any thread count (a point on a face shared by two
+  // tetrahedra may round differently in each, so the walk's start must not depend on threads).
+  const probes::BakeLight bakeLight = [&baked](const std::vector<glm::vec3>& points) {
+    std::vector<runtime::ShL2> sh;
+    int hint = 0;
+    for (const glm::vec3& p : points) sh.push_back(baked->sample(p, &hint));
+    return sh;
+  };
 
-  Result<probes::Placement> placed = probes::placeProbes(scene, *tracer.value(), options, progress);
+  Result<probes::PlacedProbes> placed =
+      probes::runPlacementJob(loaded.value(), job, baked ? &bakeLight : nullptr, progress);
   if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!placed) {
-    printError(input + ": " + placed.message());
+    printError(placed.message());
     return kExitBadInput;
   }
-  probes::Placement& placement = placed.value();
-  const double placeSeconds = secondsSince(start) - bakeSeconds;  // loading included, as before
-
-  auto tetrahedralize = [&]() -> Result<runtime::ProbeTetrahedra> {
-    Result<runtime::ProbeTetrahedra> mesh = probes::tetrahedralize(placement.positions);
-    if (!mesh) return Status::error(input + ": " + mesh.message());
-    return mesh;
-  };
-  const auto tetStart = Clock::now();
-  Result<runtime::ProbeTetrahedra> mesh = tetrahedralize();
-  if (!mesh) {
-    printError(mesh.message());
-    return kExitBadInput;
-  }
-  double tetSeconds = secondsSince(tetStart);
-
-  // --bake: split the edges across which the bake's light changes, then tetrahedralise again.
-  probes::BakeRefinement refinement;
-  if (baked) {
-    const auto bakeStart = Clock::now();
-    // In probe order, each walk starting from the last one's tetrahedron: the same answer on
-    // any thread count (a point on a face shared by two tetrahedra may round differently in
-    // each, so the walk's start must not depend on the threads).
-    std::vector<probes::AxisIrradiance> irradiance(placement.positions.size());
-    int hint = 0;
-    for (size_t i = 0; i < placement.positions.size(); ++i) {
-      const runtime::ShL2 sh = baked->sample(placement.positions[i], &hint);
-      for (int k = 0; k < 6; ++k)
-        irradiance[i][size_t(k)] = runtime::Runtime::evaluateIrradiance(sh, probes::axisNormal(k));
-    }
-    Result<probes::BakeRefinement> refined = probes::refineByBake(
-        scene, *tracer.value(), options, mesh.value(), irradiance, refineOptions, placement);
-    if (!refined) {
-      printError(input + ": " + refined.message());
-      return kExitBadInput;
-    }
-    refinement = refined.value();
-    bakeSeconds += secondsSince(bakeStart);
-    if (refinement.added > 0) {
-      const auto again = Clock::now();
-      mesh = tetrahedralize();
-      if (!mesh) {
-        printError(mesh.message());
-        return kExitBadInput;
-      }
-      tetSeconds += secondsSince(again);
-    }
-  }
-
-  probes::ReflectionPlacement reflections;
-  double reflectionSeconds = 0.0;
-  if (reflection) {
-    const auto reflectionStart = Clock::now();
-    Result<probes::ReflectionPlacement> proposed =
-        probes::placeReflectionProbes(scene, *tracer.value(), reflectionOptions, progress);
-    if (interrupted() || progress.cancelled()) return interruptedExit();
-    if (!proposed) {
-      printError(input + ": " + proposed.message());
-      return kExitBadInput;
-    }
-    reflections = std::move(proposed.value());
-    reflectionSeconds = secondsSince(reflectionStart);
-  }
-
-  // The user's probes are the pinned ones, in their file's order: they take its names.
-  std::vector<std::string> names(placement.positions.size());
-  for (size_t i = 0, u = 0; i < placement.positions.size() && u < options.userNames.size(); ++i)
-    if (placement.kinds[i] == probes::ProbeKind::Pinned) names[i] = options.userNames[u++];
-
-  trace::View view = scene.cameras.empty() ? trace::defaultView(scene, 0.9f)
-                                           : trace::cameraView(scene.cameras.front());
-  const std::vector<glm::vec3> picture =
-      probes::placementPicture(scene, *tracer.value(), placement, options.levels, view,
-                                 width, height, reflections.probes);
-
-  size_t pinned = 0;
-  for (probes::ProbeKind k : placement.kinds) pinned += k == probes::ProbeKind::Pinned;
-  nlohmann::json settings = {{"input", input},
-                             {"spacing", placement.spacing},
-                             {"levels", options.levels},
-                             {"margin", placement.margin},
-                             {"maxProbes", options.maxProbes},
-                             {"add", args.get("add")},
-                             {"threads", threadCount()}};
-  if (baked) {
-    settings["bake"] = bakeDir;
-    settings["refineThreshold"] = refineOptions.threshold;
-  }
-  if (reflection) {
-    settings["reflection"] = true;
-    settings["maxReflectionProbes"] = reflectionOptions.maxProbes;
-    settings["reflectionSpacing"] = reflections.spacing;
-  }
-  nlohmann::json summary = {{"candidates", placement.candidates},
-                            {"placed", placement.positions.size()},
-                            {"rejectedInsideGeometry", placement.rejected},
-                            {"moved", placement.moved},
-                            {"refined", placement.refined},
-                            {"pinned", pinned},
-                            {"refinedByBake", refinement.added},
-                            {"tetrahedra", mesh->tetrahedra.size()},
-                            {"placeSeconds", placeSeconds},
-                            {"tetrahedraSeconds", tetSeconds},
-                            {"warnings", placement.warnings}};
-  if (baked)
-    summary["bakeRefinement"] = {{"edges", refinement.edges},
-                                 {"shortEdges", refinement.shortEdges},
-                                 {"overThreshold", refinement.overThreshold},
-                                 {"rejected", refinement.rejected},
-                                 {"overBudget", refinement.overBudget},
-                                 {"floor", refinement.floor},
-                                 {"seconds", bakeSeconds}};
-  if (reflection)
-    summary["reflection"] = {{"proposed", reflections.probes.size()},
-                             {"candidates", reflections.candidates},
-                             {"insideGeometry", reflections.inside},
-                             {"open", reflections.open},
-                             {"thin", reflections.thin},
-                             {"centreBlocked", reflections.centreBlocked},
-                             {"overlapping", reflections.overlapping},
-                             {"overBudget", reflections.overBudget},
-                             {"seconds", reflectionSeconds},
-                             {"warnings", reflections.warnings}};
-  const std::string text = probes::probesJson(placement, names, mesh.value(), settings.dump(),
-                                              summary.dump(), "", reflections.probes);
-
-  // Both files through temporaries, renamed only once both are written.
   const fs::path outPath(output);
   const std::string picturePath = (outPath.parent_path() / outPath.stem()).string() + ".png";
-  AtomicOutput files;
-  if (Status st = files.write(output, text); !st) {
-    printError(st.message());
-    return kExitOutput;
-  }
-  if (Status st = preview::writeRenderPng(files.tempPath(picturePath), width, height, picture, 0.0f);
-      !st) {
-    printError(st.message());
-    return kExitOutput;
-  }
-  if (interrupted()) return interruptedExit();
-  if (Status st = files.commit(); !st) {
-    printError(st.message());
-    return kExitOutput;
-  }
-  if (!quiet) {
-    std::printf("scene         %s\n", input.c_str());
-    std::printf("spacing       %.3g m%s, %d finer levels, margin %.3g m\n",
-                double(placement.spacing), options.spacing > 0.0f ? "" : " (from the level's size)",
-                options.levels, double(placement.margin));
-    std::printf("candidates    %zu\n", placement.candidates);
-    std::printf("placed        %zu (%zu refined,%s %zu moved, %zu pinned)\n",
-                placement.positions.size(), placement.refined,
-                baked ? format(" %zu by the bake,", refinement.added).c_str() : "",
-                placement.moved, pinned);
-    std::printf("rejected      %zu inside geometry\n", placement.rejected);
-    if (baked)
-      std::printf("bake          %zu probes added: %zu of %zu edges differ by more than %.3g in "
-                  "%s (%zu at the finest spacing already); %zu midpoints near geometry or on a "
-                  "probe, %zu over the budget\n",
-                  refinement.added, refinement.overThreshold, refinement.edges,
-                  double(refineOptions.threshold), bakeDir.c_str(), refinement.shortEdges,
-                  refinement.rejected, refinement.overBudget);
-    std::printf("tetrahedra    %zu\n", mesh->tetrahedra.size());
-    if (reflection)
-      std::printf("reflection    %zu reflection probe%s proposed, from %zu candidates at %.3g m "
-                  "(%zu inside geometry, %zu open, %zu thin, %zu with the box's centre in "
-                  "geometry, %zu in a kept box, %zu over the budget)\n",
-                  reflections.probes.size(), reflections.probes.size() == 1 ? "" : "s",
-                  reflections.candidates, double(reflections.spacing),
-                  reflections.inside, reflections.open, reflections.thin,
-                  reflections.centreBlocked, reflections.overlapping, reflections.overBudget);
-    std::printf("time          place %.2f s,%s%s tetrahedra %.2f s\n", placeSeconds,
-                baked ? format(" bake refinement %.2f s,", bakeSeconds).c_str() : "",
-                reflection ? format(" reflection probes %.2f s,", reflectionSeconds).c_str() : "",
-                tetSeconds);
-    for (const std::string& w : scene.warnings) std::printf("warning       %s\n", w.c_str());
-    for (const std::string& w : placement.warnings) std::printf("warning       %s\n", w.c_str());
-    for (const std::string& w : reflections.warnings)
-      std::printf("warning       %s\n", w.c_str());
-    std::printf("wrote         %s, %s\n", output.c_str(), picturePath.c_str());
-  }
+  if ((code = writePlacement(job, placed.value(), output, picturePath)) != kExitOk) return code;
+  if (!quiet) printPlacement(job, placed.value(), loaded.value(), output, picturePath);
   return kExitOk;
 }
 
@@ -401,7 +292,7 @@ int runProbes(int argc, char** argv, int first) {
   if (verb == "place") return runPlace(argc, argv, first + 1);
   if (verb == "sample") return runProbesSample(argc, argv, first + 1);
   if (verb == "-h" || verb == "--help" || verb == "help") {
-    std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
+    printHelp(kProbesHelp);
     return kExitOk;
   }
   printError(verb.empty() ? "probes: missing a verb: place or sample (see afterglow probes --help)"

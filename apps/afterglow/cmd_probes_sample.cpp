@@ -3,6 +3,7 @@
 // normal or, with --json, with the tetrahedron, weights and SH for scripts.
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,33 +33,27 @@ std::string vecText(glm::vec3 v) {
 }  // namespace
 
 int runProbesSample(int argc, char** argv, int first) {
-  auto usage = [](const std::string& message) {
-    printError("probes sample: " + message + " (see afterglow probes --help)");
-    return int(kExitUsage);
-  };
+  const Command command = {"probes sample", "probes", kProbesHelp};
   Args args;
-  if (!args.parse(argc, argv, first,
-                  {{"at"}, {"normal"}, {"json", 0, false}, {"help", 'h', false}}))
-    return usage(args.error());
-  if (args.has("help")) {
-    std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
-    return kExitOk;
-  }
+  if (std::optional<int> stop =
+          parseOrExit(args, argc, argv, first,
+                      {{"at"}, {"normal"}, {"json", 0, false}, {"help", 'h', false}}, command))
+    return *stop;
   std::string outDir;
-  if (!args.single("bake folder OUT/", &outDir)) return usage(args.error());
+  if (!args.single("bake folder OUT/", &outDir)) return command.usage(args.error());
   std::vector<glm::vec3> points;
   for (const std::string& a : args.getAll("at")) {
     glm::vec3 p;
-    if (!parseVec3(a, &p)) return usage("--at wants x,y,z (metres), got '" + a + "'");
+    if (!parseVec3(a, &p)) return command.usage("--at wants x,y,z (metres), got '" + a + "'");
     points.push_back(p);
   }
-  if (points.empty()) return usage("missing --at x,y,z");
+  if (points.empty()) return command.usage("missing --at x,y,z");
   std::vector<Normal> normals;
   for (const std::string& a : args.getAll("normal")) {
     glm::vec3 n;
     const float len = parseVec3(a, &n) ? glm::length(n) : 0.0f;
     if (!(len > 0.0f) || !std::isfinite(len))
-      return usage("--normal wants a non-zero x,y,z, got '" + a + "'");
+      return command.usage("--normal wants a non-zero x,y,z, got '" + a + "'");
     normals.push_back({"", n / len});
   }
   if (normals.empty())

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "afterglow/preview/probe_spheres.h"
@@ -157,39 +158,33 @@ void printSpheres(const std::vector<preview::ProbeSphere>& spheres, int count, s
 }  // namespace
 
 int runRender(int argc, char** argv, int first) {
-  auto usage = [](const std::string& message) {
-    printError("render: " + message + " (see afterglow render --help)");
-    return int(kExitUsage);
-  };
+  const Command command = {"render", "render", kRenderHelp};
   Args args;
-  if (!args.parse(argc, argv, first,
-                  {{"output", 'o'},
-                   {"camera"},
-                   {"look-from"},
-                   {"look-at"},
-                   {"fov"},
-                   {"width"},
-                   {"height"},
-                   {"exposure"},
-                   {"threads"},
-                   {"reference", 0, false},
-                   {"probe-spheres", 0, true, isSphereCount},
-                   {"spp"},
-                   {"quiet", 0, false},
-                   {"help", 'h', false}}))
-    return usage(args.error());
-  if (args.has("help")) {
-    std::printf("%s\n%s", kRenderHelp, kExitCodesHelp);
-    return kExitOk;
-  }
-  if (args.positional().size() != 1) return usage("wants exactly one SCENE.gltf");
+  if (std::optional<int> stop = parseOrExit(args, argc, argv, first,
+                                            {{"output", 'o'},
+                                             {"camera"},
+                                             {"look-from"},
+                                             {"look-at"},
+                                             {"fov"},
+                                             {"width"},
+                                             {"height"},
+                                             {"exposure"},
+                                             {"threads"},
+                                             {"reference", 0, false},
+                                             {"probe-spheres", 0, true, isSphereCount},
+                                             {"spp"},
+                                             {"quiet", 0, false},
+                                             {"help", 'h', false}},
+                                            command))
+    return *stop;
+  if (args.positional().size() != 1) return command.usage("wants exactly one SCENE.gltf");
   const std::string input = args.positional()[0];
-  if (!args.has("output")) return usage("missing -o VIEW.png or -o VIEW.exr");
+  if (!args.has("output")) return command.usage("missing -o VIEW.png or -o VIEW.exr");
   const std::string output = args.get("output");
   const bool exr = endsWith(output, ".exr");
   if (!exr && !endsWith(output, ".png"))
-    return usage("the output must end in .png (tone mapped) or .exr (linear), got '" + output +
-                 "'");
+    return command.usage("the output must end in .png (tone mapped) or .exr (linear), got '" +
+                         output + "'");
   preview::RenderOptions options;
   int threads = 0;
   int spp = 256;
@@ -200,11 +195,12 @@ int runRender(int argc, char** argv, int first) {
       !args.getFloat("fov", 45.0f, 0.0f, 179.0f, &fovDeg) ||
       !args.getInt("threads", 0, 0, 1024, &threads) ||
       !args.getInt("spp", 256, 1, 1 << 20, &spp))
-    return usage(args.error());
+    return command.usage(args.error());
   if (args.has("exposure") && !args.getFloat("exposure", 0.0f, -100.0f, 100.0f, &exposure))
-    return usage(args.error());
+    return command.usage(args.error());
   if (args.has("exposure") && exr)
-    return usage("--exposure sets the PNG's tone mapping; an EXR holds the picture unscaled");
+    return command.usage(
+        "--exposure sets the PNG's tone mapping; an EXR holds the picture unscaled");
   // 0 = a sphere at every probe.
   int sphereCount = -1;
   if (args.has("probe-spheres")) {
@@ -214,37 +210,34 @@ int runRender(int argc, char** argv, int first) {
     } else if (value.empty()) {
       sphereCount = 8;
     } else if (!args.getInt("probe-spheres", 8, 1, 100000, &sphereCount)) {
-      return usage(args.error() + " (or 'all')");
+      return command.usage(args.error() + " (or 'all')");
     }
     if (args.has("reference"))
-      return usage("--probe-spheres draws into the baked view; the --reference path tracer "
-                   "has no probes");
+      return command.usage("--probe-spheres draws into the baked view; the --reference path "
+                           "tracer has no probes");
     if (isBuiltinScene(input))
-      return usage("--probe-spheres reads the light probes afterglow bake wrote beside the "
-                   "scene; render the scene.gltf it wrote, not " + input);
+      return command.usage("--probe-spheres reads the light probes afterglow bake wrote beside "
+                           "the scene; render the scene.gltf it wrote, not " + input);
   }
   glm::vec3 from(0.0f), at(0.0f);
   const bool lookAt = args.has("look-from") || args.has("look-at");
   if (lookAt) {
-    if (args.has("camera")) return usage("give --camera or --look-from/--look-at, not both");
+    if (args.has("camera"))
+      return command.usage("give --camera or --look-from/--look-at, not both");
     if (!args.has("look-from") || !args.has("look-at"))
-      return usage("--look-from and --look-at go together");
+      return command.usage("--look-from and --look-at go together");
     if (!parseVec3(args.get("look-from"), &from))
-      return usage("--look-from wants X,Y,Z, got '" + args.get("look-from") + "'");
+      return command.usage("--look-from wants X,Y,Z, got '" + args.get("look-from") + "'");
     if (!parseVec3(args.get("look-at"), &at))
-      return usage("--look-at wants X,Y,Z, got '" + args.get("look-at") + "'");
+      return command.usage("--look-at wants X,Y,Z, got '" + args.get("look-at") + "'");
   }
   setThreadCount(threads);
   ConsoleProgress progress(stderr, args.has("quiet"));
   InterruptGuard guard(progress);
 
-  bool badArgument = false;
-  Result<scenes::Scene> loaded = loadSceneArgument(input, true, &badArgument);
-  if (interrupted()) return interruptedExit();
-  if (!loaded) {
-    printError(loaded.message());
-    return badArgument ? kExitUsage : kExitBadInput;
-  }
+  int code = kExitOk;
+  Result<scenes::Scene> loaded = loadSceneOrExit(input, true, &code);
+  if (!loaded) return code;
   const scenes::Scene& scene = loaded.value();
   const bool reference = args.has("reference");
   const bool quiet = args.has("quiet");

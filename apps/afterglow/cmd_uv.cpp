@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <system_error>
 
 #include <nlohmann/json.hpp>
@@ -154,33 +155,25 @@ void printSummary(const std::string& output, const scenes::Scene& scene,
 }  // namespace
 
 int runUv(int argc, char** argv, int first) {
+  const Command command = {"uv", "uv", kUvHelp};
   Args args;
-  if (!args.parse(argc, argv, first,
-                  {{"output", 'o'},
-                   {"texels-per-unit"},
-                   {"padding"},
-                   {"max-atlas-size"},
-                   {"uv"},
-                   {"threads"},
-                   {"quiet", 0, false},
-                   {"help", 'h', false}})) {
-    printError("uv: " + args.error() + " (see afterglow uv --help)");
-    return kExitUsage;
-  }
-  if (args.has("help")) {
-    std::printf("%s\n%s", kUvHelp, kExitCodesHelp);
-    return kExitOk;
-  }
-  auto usage = [](const std::string& message) {
-    printError("uv: " + message + " (see afterglow uv --help)");
-    return int(kExitUsage);
-  };
+  if (std::optional<int> stop = parseOrExit(args, argc, argv, first,
+                                            {{"output", 'o'},
+                                             {"texels-per-unit"},
+                                             {"padding"},
+                                             {"max-atlas-size"},
+                                             {"uv"},
+                                             {"threads"},
+                                             {"quiet", 0, false},
+                                             {"help", 'h', false}},
+                                            command))
+    return *stop;
   std::string input;
-  if (!args.single("SCENE", &input)) return usage(args.error());
-  if (!args.has("output")) return usage("missing -o OUT.gltf");
+  if (!args.single("SCENE", &input)) return command.usage(args.error());
+  if (!args.has("output")) return command.usage("missing -o OUT.gltf");
   const std::string output = args.get("output");
   if (!endsWith(output, ".gltf") && !endsWith(output, ".glb"))
-    return usage("the output must end in .gltf or .glb, got '" + output + "'");
+    return command.usage("the output must end in .gltf or .glb, got '" + output + "'");
 
   uv::UnwrapOptions options;
   int threads = 0;
@@ -188,12 +181,12 @@ int runUv(int argc, char** argv, int first) {
       !args.getInt("padding", 2, 0, 64, &options.pack.padding) ||
       !args.getInt("max-atlas-size", 4096, 16, 65536, &options.pack.maxAtlasSize) ||
       !args.getInt("threads", 0, 0, 1024, &threads))
-    return usage(args.error());
+    return command.usage(args.error());
   const std::string mode = args.get("uv", "generate");
   if (mode == "keep")
     options.mode = uv::UvMode::Keep;
   else if (mode != "generate")
-    return usage("--uv wants generate or keep, got '" + mode + "'");
+    return command.usage("--uv wants generate or keep, got '" + mode + "'");
   const bool quiet = args.has("quiet");
   setThreadCount(threads);
 
@@ -203,14 +196,10 @@ int runUv(int argc, char** argv, int first) {
 
   // Texture images are not needed for UVs; the export keeps their URIs.
   auto t0 = Clock::now();
-  bool badArgument = false;
-  Result<scenes::Scene> loaded = loadSceneArgument(input, false, &badArgument);
+  int code = kExitOk;
+  Result<scenes::Scene> loaded = loadSceneOrExit(input, false, &code);
   timings.load = secondsSince(t0);
-  if (interrupted()) return interruptedExit();
-  if (!loaded) {
-    printError(loaded.message());
-    return badArgument ? kExitUsage : kExitBadInput;
-  }
+  if (!loaded) return code;
   scenes::Scene& scene = loaded.value();
 
   Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, options, progress);

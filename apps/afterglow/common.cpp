@@ -10,7 +10,7 @@
 
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
-#include "args.h"
+#include "commands.h"
 
 namespace afterglow::cli {
 
@@ -44,12 +44,32 @@ void printError(const std::string& message) {
   std::fprintf(stderr, "afterglow: %s\n", message.c_str());
 }
 
+int Command::usage(const std::string& message) const {
+  printError(std::string(name) + ": " + message + " (see afterglow " + helpTopic + " --help)");
+  return kExitUsage;
+}
+
+void printHelp(const char* help) { std::printf("%s\n%s", help, kExitCodesHelp); }
+
+std::optional<int> parseOrExit(Args& args, int argc, char** argv, int first,
+                               const std::vector<OptionSpec>& specs, const Command& command) {
+  if (!args.parse(argc, argv, first, specs)) return command.usage(args.error());
+  if (args.has("help")) {
+    printHelp(command.help);
+    return kExitOk;
+  }
+  return std::nullopt;
+}
+
 namespace {
 constexpr const char kBuiltinPrefix[] = "builtin:";
 }
 
 bool isBuiltinScene(const std::string& scene) { return scene.rfind(kBuiltinPrefix, 0) == 0; }
 
+namespace {
+
+// *usageError is set when the argument itself is wrong rather than the file.
 Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextures,
                                         bool* usageError) {
   *usageError = false;
@@ -66,6 +86,23 @@ Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextu
   scenes::LoadOptions options;
   options.loadTextures = loadTextures;
   return scenes::loadGltf(scene, options);
+}
+
+}  // namespace
+
+Result<scenes::Scene> loadSceneOrExit(const std::string& scene, bool loadTextures,
+                                      int* exitCode) {
+  bool badArgument = false;
+  Result<scenes::Scene> loaded = loadSceneArgument(scene, loadTextures, &badArgument);
+  if (interrupted()) {
+    *exitCode = interruptedExit();
+    return Status::error("interrupted");
+  }
+  if (!loaded) {
+    printError(loaded.message());
+    *exitCode = badArgument ? kExitUsage : kExitBadInput;
+  }
+  return loaded;
 }
 
 namespace {

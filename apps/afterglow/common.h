@@ -1,7 +1,9 @@
-// Pieces shared by the afterglow subcommands: loading SCENE arguments, errors, Ctrl-C.
+// Pieces shared by the afterglow subcommands: parsing their arguments and reporting usage errors
+// once, loading SCENE arguments, errors, Ctrl-C.
 #pragma once
 
 #include <chrono>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -11,6 +13,7 @@
 #include "afterglow/core/status.h"
 #include "afterglow/core/timer.h"
 #include "afterglow/scenes/scene.h"
+#include "args.h"
 
 namespace afterglow::cli {
 
@@ -24,12 +27,33 @@ void printError(const std::string& message);
 // Whether s ends in suffix (output file extensions).
 bool endsWith(const std::string& s, const std::string& suffix);
 
+// A subcommand as its messages and its help name it.
+struct Command {
+  const char* name;       // "probes place": starts its usage errors
+  const char* helpTopic;  // "probes": the help its usage errors point to
+  const char* help;       // what --help prints (before the exit codes)
+
+  // Prints "afterglow: <name>: <message> (see afterglow <helpTopic> --help)"; returns
+  // kExitUsage.
+  int usage(const std::string& message) const;
+};
+
+// Prints a command's help text, then the exit codes.
+void printHelp(const char* help);
+// Parses a command's arguments into `args`. The exit code to stop with when there is nothing
+// more to do: kExitUsage after a parse error (printed), kExitOk after --help (printed);
+// nullopt to go on.
+std::optional<int> parseOrExit(Args& args, int argc, char** argv, int first,
+                               const std::vector<OptionSpec>& specs, const Command& command);
+
 // True when SCENE names a built-in scene ("builtin:cornell", "builtin:furnace").
 bool isBuiltinScene(const std::string& scene);
-// Loads a .gltf/.glb path or a built-in scene. *usageError is set when the argument itself is
-// wrong (an unknown built-in name) rather than the file.
-Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextures,
-                                        bool* usageError);
+// Loads a .gltf/.glb path or a built-in scene for a command. On failure (printed) *exitCode says
+// how to stop: kExitInterrupted for a Ctrl-C during the load (checked first: a large level loads
+// a while and the load itself is not interrupted), kExitUsage when the argument itself is wrong
+// (an unknown built-in name), kExitBadInput when the file is.
+Result<scenes::Scene> loadSceneOrExit(const std::string& scene, bool loadTextures,
+                                      int* exitCode);
 
 // Ctrl-C handling. installInterruptHandler(), first thing in main, makes the first SIGINT only
 // record the interrupt (interrupted() turns true) and cancel the Progress of the living

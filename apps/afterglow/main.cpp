@@ -46,6 +46,23 @@ const char kMainHelp[] =
     "  --version      print the version\n"
     "\n";
 
+// Every subcommand: its name, help and entry point.
+struct Subcommand {
+  const char* name;
+  const char* help;
+  int (*run)(int argc, char** argv, int first);
+};
+const Subcommand kSubcommands[] = {
+    {"uv", kUvHelp, runUv},           {"info", kInfoHelp, runInfo},
+    {"bake", kBakeHelp, runBake},     {"render", kRenderHelp, runRender},
+    {"relight", kRelightHelp, runRelight}, {"probes", kProbesHelp, runProbes}};
+
+const Subcommand* find(const std::string& name) {
+  for (const Subcommand& c : kSubcommands)
+    if (name == c.name) return &c;
+  return nullptr;
+}
+
 }  // namespace
 }  // namespace afterglow::cli
 
@@ -61,18 +78,9 @@ int main(int argc, char** argv) {
   const std::string command = argv[1];
   if (command == "-h" || command == "--help" || command == "help") {
     const std::string topic = command == "help" && argc > 2 ? argv[2] : "";
-    if (topic == "uv")
-      std::printf("%s\n%s", kUvHelp, kExitCodesHelp);
-    else if (topic == "info")
-      std::printf("%s\n%s", kInfoHelp, kExitCodesHelp);
-    else if (topic == "bake")
-      std::printf("%s\n%s", kBakeHelp, kExitCodesHelp);
-    else if (topic == "render")
-      std::printf("%s\n%s", kRenderHelp, kExitCodesHelp);
-    else if (topic == "relight")
-      std::printf("%s\n%s", kRelightHelp, kExitCodesHelp);
-    else if (topic == "probes")
-      std::printf("%s\n%s", kProbesHelp, kExitCodesHelp);
+    const Subcommand* about = find(topic);
+    if (about)
+      printHelp(about->help);
     else
       std::printf("%s%s", kMainHelp, kExitCodesHelp);
     return kExitOk;
@@ -81,12 +89,7 @@ int main(int argc, char** argv) {
     std::printf("afterglow %s\n", AFTERGLOW_VERSION);
     return kExitOk;
   }
-  if (command == "uv") return runUv(argc, argv, 2);
-  if (command == "info") return runInfo(argc, argv, 2);
-  if (command == "bake") return runBake(argc, argv, 2);
-  if (command == "render") return runRender(argc, argv, 2);
-  if (command == "relight") return runRelight(argc, argv, 2);
-  if (command == "probes") return runProbes(argc, argv, 2);
+  if (const Subcommand* run = find(command)) return run->run(argc, argv, 2);
   printError((command[0] == '-' ? "unknown option '" : "unknown command '") + command +
              "' (see afterglow --help)");
   return kExitUsage;
