@@ -17,7 +17,10 @@
 #include "afterglow/baker/gather.h"
 #include "afterglow/baker/stages.h"
 #include "afterglow/core/parallel.h"
-#include "precompute/gather_rays.h"
+#include "precompute/gather_batch.h"
+#include "precompute/light_visibility.h"
+#include "precompute/sight_lines.h"
+#include "precompute/texel_lookup.h"
 #include "shading/sampling.h"
 
 namespace afterglow::baker {

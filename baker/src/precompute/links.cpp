@@ -16,7 +16,9 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/scenes/material_eval.h"
 #include "precompute/far_targets.h"
-#include "precompute/gather_rays.h"
+#include "precompute/gather_batch.h"
+#include "precompute/sight_lines.h"
+#include "precompute/texel_lookup.h"
 #include "shading/sampling.h"
 
 namespace afterglow::baker {
