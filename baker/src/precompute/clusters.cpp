@@ -2,11 +2,12 @@
 // cells centred on the group, then by normal cones.
 #include "afterglow/baker/clusters.h"
 
+#include "afterglow/baker/gather.h"
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/scenes/material_eval.h"
-#include "precompute/gather_rays.h"
+#include "precompute/sight_lines.h"
 
 #include <algorithm>
 #include <cmath>

@@ -20,8 +20,9 @@
 #include "afterglow/baker/gather.h"
 #include "afterglow/baker/stages.h"
 #include "afterglow/core/parallel.h"
-#include "precompute/gather_rays.h"
+#include "precompute/gather_batch.h"
 #include "precompute/light_visibility.h"
+#include "precompute/texel_lookup.h"
 #include "shading/sampling.h"
 
 namespace afterglow::baker {

@@ -1,5 +1,5 @@
 // Which punctual lights reach a point, as a bit set: the gather's check that a ray's hit point
-// is lit like the texel whose light it takes (gather_rays.h, TexelOfHit::lightMatch).
+// is lit like the texel whose light it takes (texel_of_hit.h, TexelOfHit's light match).
 //
 // Why: a gather ray that lands a centimetre away, on a surface whose texel sample lies a
 // quarter metre off in full sun while the hit point sits in the shadow of the very geometry

@@ -16,7 +16,9 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/scenes/material_eval.h"
 #include "precompute/far_targets.h"
-#include "precompute/gather_rays.h"
+#include "precompute/gather_batch.h"
+#include "precompute/sight_lines.h"
+#include "precompute/texel_lookup.h"
 #include "shading/sampling.h"
 
 namespace afterglow::baker {
@@ -256,15 +258,53 @@ std::vector<uint8_t> markFilterNeighbours(const trace::RayTracer& tracer, const 
   return marks;
 }
 
+// Gather point p's first texel, and whether it is its only one (a point of a texel near other
+// geometry, not of a 2×2 block).
+uint32_t firstTexelOf(const TexelGather& gather, uint32_t p) {
+  return gather.pointTexels[gather.pointStart[p]];
+}
+bool lonePoint(const TexelGather& gather, uint32_t p) {
+  return gather.pointStart[p + 1] - gather.pointStart[p] == 1;
+}
+
+// Two points may share a far field when their far hits receive alike light in every channel
+// (LinkOptions::sharedFarLightRatio); farLight per point and channel (farLightOfPoints), empty:
+// no check.
+class FarLitAlike {
+ public:
+  FarLitAlike(const std::vector<float>& farLight, const ClusterLight& light, float ratio)
+      : farLight_(farLight), light_(light), ratio_(ratio) {}
+  bool operator()(uint32_t a, uint32_t b) const {
+    if (farLight_.empty()) return true;
+    const size_t channels = light_.channels.size();
+    for (size_t ch = 0; ch < channels; ++ch) {
+      const float x = farLight_[a * channels + ch], y = farLight_[b * channels + ch];
+      if (std::max(x, y) > ratio_ * std::min(x, y) + kSharedFloor * light_.floors[ch])
+        return false;
+    }
+    return true;
+  }
+
+ private:
+  // A fifth of ClusterLight's floor (a hundredth of the channel's mean): a point whose far hits
+  // are all in shade must not take a far field with some sun in it. Between shaded far fields
+  // the difference is their bounced light, which this check cannot see, and on Sponza-sun at 8
+  // texels/m a point under a ledge took its neighbours' far field, 20 times its own.
+  static constexpr float kSharedFloor = 0.2f;
+  const std::vector<float>& farLight_;
+  const ClusterLight& light_;
+  float ratio_;
+};
+
 // Gather points that share a far field (LinkOptions::sharedFarSpan): points of one kind (of one
 // texel, or 2×2 blocks: a texel near other geometry sees a far field unlike its block
 // neighbours') in one span × span square of an atlas, on one surface and in sight of each
-// other. In rounds: in
-// every square the first point without a group anchors one, and the square's other points
-// without one join it when they share its surface and see it (the sight lines of a round
-// traced together); the rest try again next round. Per point its group, numbered in the order
-// of their anchors, or kNoTexel for a point alone in its group (its row keeps its far links:
-// sharing would only add one). Deterministic: the rounds do not depend on threads.
+// other. In rounds: in every square the first point without a group anchors one, and the
+// square's other points without one join it when they share its surface and see it (the sight
+// lines of a round traced together); the rest try again next round. Per point its group,
+// numbered in the order of their anchors, or kNoTexel for a point alone in its group (its row
+// keeps its far links: sharing would only add one). Deterministic: the rounds do not depend on
+// threads.
 struct FarGroups {
   std::vector<uint32_t> ofPoint;
   std::vector<uint32_t> start{0};  // group g's points: points[start[g] .. start[g+1])
@@ -272,20 +312,13 @@ struct FarGroups {
   uint32_t size() const { return uint32_t(start.size() - 1); }
 };
 
-template <class Alike>
-FarGroups shareFarFields(const trace::RayTracer& tracer, const TexelSet& texels,
-                         const TexelGather& gather, int span, const Alike& alike) {
-  const uint32_t points = gather.points();
-  FarGroups out;
-  out.ofPoint.assign(points, kNoTexel);
-  if (span <= 1) return out;
-  auto firstTexel = [&](uint32_t p) { return gather.pointTexels[gather.pointStart[p]]; };
-  auto lone = [&](uint32_t p) { return gather.pointStart[p + 1] - gather.pointStart[p] == 1; };
-  // (square, point) for every point (its first texel's square), sorted: each square's points
-  // in a run.
+// (square, point) for every point (its first texel's square), sorted: each square's points in
+// a run.
+std::vector<std::pair<uint64_t, uint32_t>> pointsBySquare(const TexelSet& texels,
+                                                          const TexelGather& gather, int span) {
   std::vector<std::pair<uint64_t, uint32_t>> order;
-  for (uint32_t p = 0; p < points; ++p) {
-    const uint32_t t = firstTexel(p);
+  for (uint32_t p = 0; p < gather.points(); ++p) {
+    const uint32_t t = firstTexelOf(gather, p);
     const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
     const uint64_t columns = uint64_t(layout.width + span - 1) / uint64_t(span);
     const uint64_t square = uint64_t(texels.pixel[t].y / span) * columns +
@@ -293,7 +326,17 @@ FarGroups shareFarFields(const trace::RayTracer& tracer, const TexelSet& texels,
     order.push_back({(uint64_t(texels.atlas[t]) << 40) | square, p});
   }
   std::sort(order.begin(), order.end());
-  std::vector<uint32_t> anchor(points, kNoTexel);  // per point, its group's anchor point
+  return order;
+}
+
+// The rounds of shareFarFields over the points in square order: per point, its group's anchor
+// point (kNoTexel: none).
+std::vector<uint32_t> anchorPoints(const trace::RayTracer& tracer, const TexelSet& texels,
+                                   const TexelGather& gather,
+                                   const std::vector<std::pair<uint64_t, uint32_t>>& order,
+                                   const FarLitAlike& alike) {
+  auto firstTexel = [&](uint32_t p) { return firstTexelOf(gather, p); };
+  std::vector<uint32_t> anchor(gather.points(), kNoTexel);
   std::vector<trace::Ray> sights;
   std::vector<std::pair<uint32_t, uint32_t>> joins;  // per sight line: point, anchor
   for (bool open = true; open;) {
@@ -311,8 +354,8 @@ FarGroups shareFarFields(const trace::RayTracer& tracer, const TexelSet& texels,
           open = true;
           continue;
         }
-        if (lone(a) != lone(p) || !sameSurface(texels, firstTexel(a), firstTexel(p)) ||
-            !alike(a, p))
+        if (lonePoint(gather, a) != lonePoint(gather, p) ||
+            !sameSurface(texels, firstTexel(a), firstTexel(p)) || !alike(a, p))
           continue;
         if (!sightLine(texels, firstTexel(a), firstTexel(p), sights.emplace_back())) {
           sights.pop_back();
@@ -327,6 +370,18 @@ FarGroups shareFarFields(const trace::RayTracer& tracer, const TexelSet& texels,
     for (size_t k = 0; k < joins.size(); ++k)
       if (!blocked[k]) anchor[joins[k].first] = joins[k].second;
   }
+  return anchor;
+}
+
+FarGroups shareFarFields(const trace::RayTracer& tracer, const TexelSet& texels,
+                         const TexelGather& gather, int span, const FarLitAlike& alike) {
+  const uint32_t points = gather.points();
+  FarGroups out;
+  out.ofPoint.assign(points, kNoTexel);
+  if (span <= 1) return out;
+  const std::vector<uint32_t> anchor =
+      anchorPoints(tracer, texels, gather, pointsBySquare(texels, gather, span), alike);
+  // The groups of more than one point, numbered in their anchors' order.
   std::vector<uint32_t> members(points, 0);
   for (uint32_t p = 0; p < points; ++p)
     if (anchor[p] != kNoTexel) ++members[anchor[p]];
@@ -345,6 +400,418 @@ FarGroups shareFarFields(const trace::RayTracer& tracer, const TexelSet& texels,
     if (g != kNoTexel) out.points[fill[g]++] = p;
   }
   return out;
+}
+
+// Checks that the options are usable and that the gather, the clusters and the far levels
+// match the texel set.
+Status checkLinkInputs(const TexelSet& texels, const TexelGather& gather, const Clusters& clusters,
+                       const LinkOptions& options, const std::vector<Clusters>& farLevels) {
+  if (options.clusterRays <= 0) return Status::error("computeLinks: clusterRays must be positive");
+  const uint32_t texelCount = texels.size();
+  const uint32_t clusterCount = clusters.size();
+  if (clusters.texelCluster.size() != texelCount)
+    return Status::error(format("computeLinks: clusters cover %zu texels, the texel set has %u",
+                                clusters.texelCluster.size(), texelCount));
+  if (gather.hitStart.size() != size_t(texelCount) + 1 ||
+      gather.sky.size() != size_t(texelCount) * kShCount ||
+      gather.pointOfTexel.size() != texelCount || gather.fullRays.size() != texelCount)
+    return Status::error("computeLinks: the gather does not match the texel set");
+  if (clusterCount > 0 && clusters.firstTexel.size() != size_t(clusterCount) + 1)
+    return Status::error("computeLinks: Clusters::firstTexel needs one entry per cluster plus one");
+  for (const Clusters& far : farLevels)
+    if (far.texelCluster.size() != texelCount)
+      return Status::error("computeLinks: the far clusters do not match the texel set");
+  return Status::ok();
+}
+
+// The area of cluster c's texels, and texel t's share of it (of `members` texels: an even
+// share when they have no area): how a cluster averages its texels.
+double memberArea(const TexelSet& texels, const Clusters& clusters, size_t c) {
+  double area = 0.0;
+  for (uint32_t k = clusters.firstTexel[c]; k < clusters.firstTexel[c + 1]; ++k)
+    area += double(texels.area[clusters.memberTexels[k]]);
+  return area;
+}
+double shareOf(const TexelSet& texels, uint32_t t, double area, uint32_t members) {
+  return area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(members);
+}
+
+// The front clusters' sky transfer, the area-weighted mean of their texels' (the back
+// clusters' comes with their rays, traceBackRays); before the far targets, whose light check
+// reads it.
+void frontClusterSky(const TexelSet& texels, const TexelGather& gather, const Clusters& clusters,
+                     runtime::TransportData& transport) {
+  transport.clusterSky.assign(size_t(clusters.size()) * kShCount, 0);
+  parallelFor(clusters.size(), [&](size_t c) {
+    if (clusters.back[c]) return;
+    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
+    const double area = memberArea(texels, clusters, c);
+    double sky[kShCount] = {};
+    for (uint32_t k = first; k < last; ++k) {
+      const uint32_t t = clusters.memberTexels[k];
+      if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
+      const double share = shareOf(texels, t, area, last - first);
+      for (int i = 0; i < kShCount; ++i)
+        sky[i] += share * double(gather.sky[size_t(t) * kShCount + size_t(i)]);
+    }
+    for (int i = 0; i < kShCount; ++i)
+      transport.clusterSky[c * kShCount + size_t(i)] = runtime::floatToHalf(float(sky[i]));
+  }, 1024);
+}
+
+// What the gather points' rays link to, and with what weight (visit).
+class PointHits {
+ public:
+  // Flags a target as far (targetOf): the far field a group of points may share.
+  static constexpr uint32_t kFarHit = 0x80000000u;
+  static_assert(runtime::kMaxLinkTargets <= kFarHit, "the flag is above every target");
+
+  PointHits(const TexelSet& texels, const TexelGather& gather, const Clusters& clusters,
+            const FarTargets& far, const runtime::TransportData& transport)
+      : texels_(texels), gather_(gather), clusters_(clusters), far_(far),
+        albedoRatios_(gather.hitAlbedo.size() == gather.hits.size() && !gather.hits.empty()) {
+    if (albedoRatios_)
+      for (const glm::vec3& a : transport.clusterAlbedoTexture)
+        clusterGrey_.push_back((a.x + a.y + a.z) / 3.0f);
+  }
+
+  // What a gather point's ray from texel `from` links to: the coarsest far cluster of a front
+  // hit seen from far enough (flagged kFarHit), else the hit's cluster.
+  uint32_t targetOf(uint32_t code, uint32_t from) const {
+    if (far_.empty() || code == TexelGather::kNoHit || (code & TexelGather::kBackSide))
+      return clusterOfHit(clusters_, code);
+    const uint32_t t = code & TexelGather::kTexelMask;
+    const glm::vec3 d = texels_.position[t] - texels_.position[from];
+    bool seenFar = false;
+    const uint32_t f = far_.of(t, glm::dot(d, d), &seenFar);
+    if (f != kNoTexel) return f | kFarHit;
+    // Seen from far, but in a far cluster lit unevenly: its own cluster, still far (sharable).
+    const uint32_t c = clusterOfHit(clusters_, code);
+    return c != kNoTexel && seenFar ? (c | kFarHit) : c;
+  }
+
+  // A hit close by (within albedoDetail texel edges) on the front of a textured surface sees
+  // the texture there, not its cluster's mean: the link to its cluster carries the albedo at
+  // the hit point over the cluster's (TexelGather::hitAlbedo over clusterAlbedoTexture). On
+  // Sponza-sun walls a few cm from roof tiles and column mouldings whose texture differs 2x
+  // from their cluster's mean were 50% too bright or dark (issue 16). A ratio of texture
+  // modulations, as the transport's own, so a relight of the albedo factors leaves it be
+  // (untextured materials: no code, exactly 1).
+  double albedoDetail(uint32_t hitIndex, uint32_t code, uint32_t target) const {
+    if (!albedoRatios_ || gather_.hitAlbedo[hitIndex] == 0) return 1.0;
+    if (target != clusters_.texelCluster[code & TexelGather::kTexelMask]) return 1.0;
+    const float grey = clusterGrey_[target];
+    return grey > 0.0f ? double(TexelGather::albedoOfCode(gather_.hitAlbedo[hitIndex]) / grey)
+                       : 1.0;
+  }
+
+  // A gather point's rays pooled, visit(target, weight, ray index, far hit) per hit. Hits in
+  // the near field count over all the point's rays; hits beyond it were kept from the full
+  // sets only, and share what the near hits and the misses leave (a ratio estimate), so every
+  // row plus its misses sums to exactly 1 and a closed room neither gains nor loses light.
+  template <class Visit>
+  void visit(uint32_t p, Visit&& visit) const {
+    const TexelGather& gather = gather_;
+    uint32_t all = 0, near = 0, misses = 0, farFull = 0;
+    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
+      const uint32_t t = gather.pointTexels[k];
+      const uint32_t firstHit = gather.hitStart[t], n = gather.hitStart[t + 1] - firstHit;
+      all += n;
+      for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t code = gather.hits[firstHit + i];
+        if (code == TexelGather::kNoHit) ++misses;
+        else if (!(code & TexelGather::kFar)) ++near;
+        else if (i < gather.fullRays[t]) ++farFull;
+      }
+    }
+    if (all == 0) return;
+    const double farMass = double(all - near - misses) / double(all);
+    // No full ray went far although others did: their share stays with the near hits.
+    const double nearWeight = farFull > 0 || near == 0 ? 1.0 / double(all)
+                                                       : (1.0 - double(misses) / all) / near;
+    const double farWeight = farFull > 0 ? farMass / double(farFull) : 0.0;
+    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
+      const uint32_t t = gather.pointTexels[k];
+      const uint32_t firstHit = gather.hitStart[t], n = gather.hitStart[t + 1] - firstHit;
+      for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t code = gather.hits[firstHit + i];
+        const bool inNearField = !(code & TexelGather::kFar);
+        if (!inNearField && i >= gather.fullRays[t]) continue;  // counted by the full rays
+        const uint32_t c = targetOf(code, t);
+        if (c == kNoTexel) continue;
+        const double w = (inNearField ? nearWeight : farWeight) *
+                         albedoDetail(firstHit + i, code, c & ~kFarHit);
+        visit(c & ~kFarHit, w, i, c >= kFarHit);
+      }
+    }
+  }
+
+ private:
+  const TexelSet& texels_;
+  const TexelGather& gather_;
+  const Clusters& clusters_;
+  const FarTargets& far_;
+  const bool albedoRatios_;
+  std::vector<float> clusterGrey_;  // per cluster, its texture's grey modulation
+};
+
+// Per gather point and light channel, the mean light its far hits' targets receive directly
+// (a far cluster: its clusters' area-weighted mean), for the far fields' sharing (FarLitAlike);
+// empty when there is nothing to share or no light to compare.
+std::vector<float> farLightOfPoints(const PointHits& hits, uint32_t points, const ClusterLight& light,
+                                    const FarTargets& far, const runtime::TransportData& transport,
+                                    const LinkOptions& options) {
+  const size_t channels = light.channels.size();
+  std::vector<float> farLight;
+  if (!(channels > 0 && !far.empty() && options.sharedFarSpan > 1 &&
+        options.sharedFarLightRatio > 1.0f))
+    return farLight;
+  const uint32_t clusterCount = transport.clusterCount;
+  const runtime::SparseMatrix& mix = transport.farClusters;
+  std::vector<float> targetLight(size_t(clusterCount + mix.rows()) * channels, 0.0f);
+  for (size_t ch = 0; ch < channels; ++ch) {
+    for (uint32_t c = 0; c < clusterCount; ++c)
+      targetLight[c * channels + ch] = light.channels[ch][c];
+    for (size_t f = 0; f < mix.rows(); ++f) {
+      double sum = 0.0;
+      for (uint32_t k = mix.rowStart[f]; k < mix.rowStart[f + 1]; ++k)
+        sum += double(mix.weight[k]) * double(light.channels[ch][mix.column[k]]);
+      targetLight[(clusterCount + f) * channels + ch] = float(sum);
+    }
+  }
+  farLight.assign(size_t(points) * channels, 0.0f);
+  parallelFor(points, [&](size_t p) {
+    std::vector<double> sum(channels, 0.0);
+    double weight = 0.0;
+    hits.visit(uint32_t(p), [&](uint32_t c, double w, uint32_t, bool farHit) {
+      if (!farHit) return;
+      weight += w;
+      for (size_t ch = 0; ch < channels; ++ch)
+        sum[ch] += w * double(targetLight[c * channels + ch]);
+    });
+    if (weight > 0.0)
+      for (size_t ch = 0; ch < channels; ++ch)
+        farLight[p * channels + ch] = float(sum[ch] / weight);
+  }, 1024);
+  return farLight;
+}
+
+// The back clusters' rays: a back cluster gathers with rays of its own from behind its texels,
+// as many as they would cast from the front (up to clusterRays), round robin, each texel
+// stratifying its share.
+struct BackRays {
+  std::vector<uint32_t> clusters;  // the back clusters with texels, their rows in this order
+  std::vector<uint32_t> start;     // cluster i's rays: codes[start[i] .. start[i + 1])
+  std::vector<uint32_t> codes;     // per ray, its TexelGather hit code
+};
+
+// How many rays back cluster c casts: `rays` per texel, up to clusterRays.
+uint32_t backRayCount(const Clusters& clusters, uint32_t rays, uint32_t clusterRays, uint32_t c) {
+  const uint64_t m = clusters.firstTexel[c + 1] - clusters.firstTexel[c];
+  return uint32_t(std::min<uint64_t>(clusterRays, uint64_t(rays) * m));
+}
+
+BackRays planBackRays(const Clusters& clusters, uint32_t rays, uint32_t clusterRays) {
+  BackRays out;
+  for (uint32_t c = 0; c < clusters.size(); ++c)
+    if (clusters.back[c] && clusters.firstTexel[c] < clusters.firstTexel[c + 1])
+      out.clusters.push_back(c);
+  out.start.assign(out.clusters.size() + 1, 0);
+  for (size_t i = 0; i < out.clusters.size(); ++i)
+    out.start[i + 1] = out.start[i] + backRayCount(clusters, rays, clusterRays, out.clusters[i]);
+  out.codes.resize(out.start.back());
+  return out;
+}
+
+// Queues back cluster c's `count` rays. Ray s belongs to member s % m as its (s / m)-th:
+// queued member by member (one frame and one stratification each; the members' shares differ
+// by one at most).
+void queueBackRays(const TexelSet& texels, const Clusters& clusters, uint32_t c, uint32_t count,
+                   GatherBatch& batch) {
+  const uint32_t first = clusters.firstTexel[c], m = clusters.firstTexel[c + 1] - first;
+  const sampling::Rng::ItemSeed seed{sampling::Rng::itemSeed(sampling::Stream::ClusterLinks, c)};
+  const uint32_t share = count / m, extra = count % m;
+  const sampling::Stratified more(share + 1), fewer(std::max(share, 1u));
+  for (uint32_t i = 0; i < std::min(m, count); ++i) {
+    const uint32_t t = clusters.memberTexels[first + i];
+    const uint32_t localCount = share + (i < extra ? 1 : 0);
+    const sampling::Stratified& strata = i < extra ? more : fewer;
+    const sampling::Frame frame(-texels.normal[t]);
+    const glm::vec3 origin = texels.backPosition(t), geometricNormal = -texels.geometricNormal[t];
+    for (uint32_t local = 0; local < localCount; ++local) {
+      sampling::Rng rng(seed, local * m + i);
+      batch.add(origin, frame, geometricNormal, strata.point(rng, local));
+    }
+  }
+}
+
+// Traces the back clusters' rays, several clusters to a batch (a cluster casts a few hundred
+// rays; Embree's coherent streams and the hit lookup's prefetching do better on a thousand or
+// more), keeping their hit codes for the rows and storing their sky transfer.
+void traceBackRays(const trace::RayTracer& tracer, const TexelSet& texels,
+                   const Clusters& clusters, BackRays& back, runtime::TransportData& transport,
+                   Progress& progress) {
+  const TexelLookup lookup(texels);
+  parallelForBlocks(back.clusters.size(), [&](size_t begin, size_t end, int) {
+    constexpr size_t kRaysPerBatch = 1024;
+    GatherBatch batch;  // its per-geometry cache is valid for this bake's tracer only
+    for (size_t i = begin; i < end && !progress.cancelled();) {
+      batch.clear();
+      const size_t firstCluster = i;
+      for (; i < end && batch.size() < kRaysPerBatch; ++i)
+        queueBackRays(texels, clusters, back.clusters[i], back.start[i + 1] - back.start[i], batch);
+      batch.trace(tracer, texels, &lookup);
+      std::copy(batch.codes().begin(), batch.codes().end(),
+                back.codes.begin() + back.start[firstCluster]);
+      for (size_t j = firstCluster; j < i; ++j) {
+        const uint32_t from = back.start[j] - back.start[firstCluster];
+        const uint32_t count = back.start[j + 1] - back.start[j];
+        const GatherBatch::Summary seen = batch.summarize(tracer, from, from + count);
+        for (int k = 0; k < kShCount; ++k)
+          transport.clusterSky[size_t(back.clusters[j]) * kShCount + size_t(k)] =
+              runtime::floatToHalf(float(seen.sky[k] * (1.0 / double(count))));
+      }
+    }
+    progress.advance(end - begin);
+  }, 16);
+}
+
+// The rows of the links' matrices (RowBuilder): the gather points', the shared far fields' and
+// the back clusters'.
+class LinkRows {
+ public:
+  LinkRows(const TexelGather& gather, const Clusters& clusters, const PointHits& hits,
+           const FarGroups& groups, const BackRays& back, uint32_t sharedBase,
+           const LinkOptions& options)
+      : gather_(gather), clusters_(clusters), hits_(hits), groups_(groups), back_(back),
+        sharedBase_(sharedBase), minWeight_(options.minWeight),
+        sharedRays_(uint64_t(std::max(1.0f, options.sharedFarPoints * float(gather.raysPerTexel)))),
+        blockRays_(4 * uint64_t(gather.raysPerTexel)) {}
+
+  // The shared far fields' rows (shared()), each normalised to sum to 1.
+  void buildShared(Progress& progress, runtime::SparseLinks& out) const {
+    buildRows(
+        groups_.size(), sharedBase_, progress, [&] { return RowBuilder(sharedBase_); },
+        [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
+          shared(uint32_t(r), row);
+          row.finish(minWeight_, links);
+          double sum = 0.0;
+          for (const Link& l : links) sum += double(l.weight);
+          for (Link& l : links) l.weight = float(double(l.weight) / sum);
+        },
+        out, 64);
+  }
+
+  // The links' rows over `targets` targets: the gather points' (point()), then the back
+  // clusters' (back()).
+  void buildLinks(uint32_t targets, Progress& progress, runtime::SparseLinks& out) const {
+    const uint32_t points = gather_.points();
+    buildRows(
+        size_t(points) + back_.clusters.size(), targets, progress,
+        [&] { return RowBuilder(targets); },
+        [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
+          if (r < points) point(uint32_t(r), row);
+          else back(r - points, row);
+          row.finish(minWeight_, links);
+        },
+        out, 256);
+  }
+
+  // A point's row: its hits, except that a point sharing a far field links that field with
+  // the weight of its own hits on far clusters instead of linking them one by one.
+  void point(uint32_t p, RowBuilder& row) const {
+    const uint32_t group = groups_.ofPoint[p];
+    double shared = 0.0;
+    hits_.visit(p, [&](uint32_t c, double w, uint32_t, bool farHit) {
+      if (group != kNoTexel && farHit) shared += w;
+      else row.add(c, w);
+    });
+    if (shared > 0.0) row.add(sharedBase_ + group, shared);
+  }
+
+  // A shared far field: its points' hits on far clusters, as they weigh in their own rows
+  // (each point's rays count alike). A pool of texels near other geometry (up to
+  // sharedFarSpan² points) is thinned to about sharedFarPoints × texelRays rays: the group's
+  // rays interleaved (ray i of the group's k-th point is ray i × m + k of the group) and an
+  // even share of them kept; as every point casts texelRays full rays, that keeps whole
+  // points' sets, each a stratified set of its own. A fraction, not every n-th:
+  // sharedFarPoints then sets the links' count smoothly. A pool of 2×2 blocks keeps four
+  // points' rays, every ray of a square of four full blocks, whose rays together are one
+  // stratified set of their tile's sequence (sampling::TiledSobol), while three blocks' worth
+  // left the field that the square's points share erring alike over the square, a blotch (the
+  // Cornell box's ceiling: 1.0% band-passed against 0.8%, for 3% more links on Sponza).
+  // Normalised where it is built.
+  void shared(uint32_t g, RowBuilder& row) const {
+    const uint32_t first = groups_.start[g], m = groups_.start[g + 1] - first;
+    uint64_t pooled = 0;
+    for (uint32_t k = first; k < first + m; ++k) {
+      const uint32_t p = groups_.points[k];
+      for (uint32_t i = gather_.pointStart[p]; i < gather_.pointStart[p + 1]; ++i)
+        pooled += gather_.fullRays[gather_.pointTexels[i]];
+    }
+    const uint32_t anchor = groups_.points[first];
+    const bool blocks = gather_.pointStart[anchor + 1] - gather_.pointStart[anchor] > 1;
+    const uint64_t keep = std::min(blocks ? blockRays_ : sharedRays_, pooled);
+    for (uint32_t k = first; k < first + m; ++k) {
+      hits_.visit(groups_.points[k], [&](uint32_t c, double w, uint32_t ray, bool farHit) {
+        const uint64_t i = uint64_t(ray) * m + (k - first);
+        if (farHit && (i + 1) * keep / pooled > i * keep / pooled) row.add(c, w);
+      });
+    }
+  }
+
+  // Back cluster i's row: its own rays' hits, each weighing alike.
+  void back(size_t i, RowBuilder& row) const {
+    const double weight = 1.0 / double(back_.start[i + 1] - back_.start[i]);
+    for (uint32_t k = back_.start[i]; k < back_.start[i + 1]; ++k) {
+      const uint32_t target = clusterOfHit(clusters_, back_.codes[k]);
+      if (target != kNoTexel) row.add(target, weight);
+    }
+  }
+
+ private:
+  const TexelGather& gather_;
+  const Clusters& clusters_;
+  const PointHits& hits_;
+  const FarGroups& groups_;
+  const BackRays& back_;
+  const uint32_t sharedBase_;
+  const float minWeight_;
+  const uint64_t sharedRays_, blockRays_;
+};
+
+// Sky transfer per texel: its gather point's, as half floats.
+void storeTexelSky(const TexelSet& texels, const TexelGather& gather,
+                   runtime::TransportData& transport) {
+  transport.texelSky.assign(size_t(texels.size()) * kShCount, 0);
+  parallelFor(texels.size(), [&](size_t t) {
+    if (texels.valid[t])
+      for (int i = 0; i < kShCount; ++i)
+        transport.texelSky[t * kShCount + size_t(i)] =
+            runtime::floatToHalf(gather.sky[t * kShCount + size_t(i)]);
+  }, 4096);
+}
+
+// What each cluster gathers: its texels' gather points, area-weighted (a back cluster: its own
+// row, after the points').
+runtime::SparseMatrix clusterGather(const TexelSet& texels, const TexelGather& gather,
+                                    const Clusters& clusters, const BackRays& back) {
+  std::vector<uint32_t> backRowOf(clusters.size(), kNoTexel);
+  for (size_t i = 0; i < back.clusters.size(); ++i)
+    backRowOf[back.clusters[i]] = gather.points() + uint32_t(i);
+  return runtime::normalisedRows(clusters.size(), [&](size_t c, auto& entries) {
+    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
+    if (clusters.back[c]) {
+      if (backRowOf[c] != kNoTexel) entries.emplace_back(backRowOf[c], 1.0f);
+      return;
+    }
+    const double area = memberArea(texels, clusters, c);
+    for (uint32_t k = first; k < last; ++k) {
+      const uint32_t t = clusters.memberTexels[k];
+      if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
+      entries.emplace_back(gather.pointOfTexel[t], float(shareOf(texels, t, area, last - first)));
+    }
+  }, blockRanges());
 }
 
 }  // namespace
@@ -433,193 +900,26 @@ Status computeLinks(const scenes::Scene& scene, const trace::RayTracer& tracer, 
                     const TexelGather& gather, const Clusters& clusters,
                     const LinkOptions& options, runtime::TransportData& transport,
                     Progress& progress, const std::vector<Clusters>& farLevels) {
-  if (options.clusterRays <= 0) return Status::error("computeLinks: clusterRays must be positive");
-  const uint32_t texelCount = texels.size();
-  const uint32_t clusterCount = clusters.size();
+  if (Status st = checkLinkInputs(texels, gather, clusters, options, farLevels); !st) return st;
   const uint32_t points = gather.points();
-  const uint32_t rays = gather.raysPerTexel;  // back clusters cast as many per texel
-  if (clusters.texelCluster.size() != texelCount)
-    return Status::error(format("computeLinks: clusters cover %zu texels, the texel set has %u",
-                                clusters.texelCluster.size(), texelCount));
-  if (gather.hitStart.size() != size_t(texelCount) + 1 ||
-      gather.sky.size() != size_t(texelCount) * kShCount ||
-      gather.pointOfTexel.size() != texelCount || gather.fullRays.size() != texelCount)
-    return Status::error("computeLinks: the gather does not match the texel set");
-  if (clusterCount > 0 && clusters.firstTexel.size() != size_t(clusterCount) + 1)
-    return Status::error("computeLinks: Clusters::firstTexel needs one entry per cluster plus one");
-
-  for (const Clusters& far : farLevels)
-    if (far.texelCluster.size() != texelCount)
-      return Status::error("computeLinks: the far clusters do not match the texel set");
-
-  transport.texelCount = texelCount;
-  transport.clusterCount = clusterCount;
+  transport.texelCount = texels.size();
+  transport.clusterCount = clusters.size();
   transport.gatherPointCount = points;
   transport.atlases = texels.atlases;
   fillMaterials(scene, clusters, transport);
+  frontClusterSky(texels, gather, clusters, transport);
 
-  // The cluster a hit code lands in: the texel's front cluster, or its back-side cluster.
-  auto clusterOf = [&](uint32_t code) { return clusterOfHit(clusters, code); };
-  // The front clusters' sky transfer, the area-weighted mean of their texels' (the back
-  // clusters' comes with their rays below); before the far targets, whose light check reads it.
-  auto memberArea = [&](size_t c) {
-    double area = 0.0;
-    for (uint32_t k = clusters.firstTexel[c]; k < clusters.firstTexel[c + 1]; ++k)
-      area += double(texels.area[clusters.memberTexels[k]]);
-    return area;
-  };
-  auto shareOf = [&](uint32_t t, double area, uint32_t members) {
-    return area > 0.0 ? double(texels.area[t]) / area : 1.0 / double(members);
-  };
-  transport.clusterSky.assign(size_t(clusterCount) * kShCount, 0);
-  parallelFor(clusterCount, [&](size_t c) {
-    if (clusters.back[c]) return;
-    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
-    const double area = memberArea(c);
-    double sky[kShCount] = {};
-    for (uint32_t k = first; k < last; ++k) {
-      const uint32_t t = clusters.memberTexels[k];
-      if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
-      const double share = shareOf(t, area, last - first);
-      for (int i = 0; i < kShCount; ++i)
-        sky[i] += share * double(gather.sky[size_t(t) * kShCount + size_t(i)]);
-    }
-    for (int i = 0; i < kShCount; ++i)
-      transport.clusterSky[c * kShCount + size_t(i)] = runtime::floatToHalf(float(sky[i]));
-  }, 1024);
+  // The link targets: clusters, far clusters, and the far fields that points share.
   const ClusterLight light = clusterLight(transport, options.farLightRatio);
   const FarTargets far = farTargets(texels, clusters, farLevels, options.farDistance,
                                     &transport.farClusters, light);
-  // What a gather point's ray from texel `from` links to: the coarsest far cluster of a front
-  // hit seen from far enough (flagged kFarHit: the far field a group may share), else the
-  // hit's cluster.
-  constexpr uint32_t kFarHit = 0x80000000u;
-  static_assert(runtime::kMaxLinkTargets <= kFarHit, "the flag is above every target");
-  auto targetOf = [&](uint32_t code, uint32_t from) -> uint32_t {
-    if (far.empty() || code == TexelGather::kNoHit || (code & TexelGather::kBackSide))
-      return clusterOf(code);
-    const uint32_t t = code & TexelGather::kTexelMask;
-    const glm::vec3 d = texels.position[t] - texels.position[from];
-    bool seenFar = false;
-    const uint32_t f = far.of(t, glm::dot(d, d), &seenFar);
-    if (f != kNoTexel) return f | kFarHit;
-    // Seen from far, but in a far cluster lit unevenly: its own cluster, still far (sharable).
-    const uint32_t c = clusterOf(code);
-    return c != kNoTexel && seenFar ? (c | kFarHit) : c;
-  };
-  std::vector<uint32_t> backClusters;
-  for (uint32_t c = 0; c < clusterCount; ++c)
-    if (clusters.back[c] && clusters.firstTexel[c] < clusters.firstTexel[c + 1]) backClusters.push_back(c);
-
-  // A hit close by (within albedoDetail texel edges) on the front of a textured surface sees
-  // the texture there, not its cluster's mean: the link to its cluster carries the albedo at
-  // the hit point over the cluster's (TexelGather::hitAlbedo over clusterAlbedoTexture). On
-  // Sponza-sun walls a few cm from roof tiles and column mouldings whose texture differs 2x
-  // from their cluster's mean were 50% too bright or dark (issue 16). A ratio of texture
-  // modulations, as the transport's own, so a relight of the albedo factors leaves it be
-  // (untextured materials: no code, exactly 1).
-  const bool albedoRatios = gather.hitAlbedo.size() == gather.hits.size() && !gather.hits.empty();
-  std::vector<float> clusterGrey;  // per cluster, its texture's grey modulation
-  if (albedoRatios)
-    for (const glm::vec3& a : transport.clusterAlbedoTexture)
-      clusterGrey.push_back((a.x + a.y + a.z) / 3.0f);
-  auto albedoDetail = [&](uint32_t hitIndex, uint32_t code, uint32_t target) -> double {
-    if (!albedoRatios || gather.hitAlbedo[hitIndex] == 0) return 1.0;
-    if (target != clusters.texelCluster[code & TexelGather::kTexelMask]) return 1.0;
-    const float grey = clusterGrey[target];
-    return grey > 0.0f ? double(TexelGather::albedoOfCode(gather.hitAlbedo[hitIndex]) / grey) : 1.0;
-  };
-  // A gather point's rays pooled, visit(target, weight, ray index, far hit) per hit. Hits in
-  // the near field count over all the point's rays; hits beyond it were kept from the full
-  // sets only, and share what the near hits and the misses leave (a ratio estimate), so every
-  // row plus its misses sums to exactly 1 and a closed room neither gains nor loses light.
-  auto pointHits = [&](uint32_t p, auto&& visit) {
-    uint32_t all = 0, near = 0, misses = 0, farFull = 0;
-    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
-      const uint32_t t = gather.pointTexels[k];
-      const uint32_t firstHit = gather.hitStart[t], n = gather.hitStart[t + 1] - firstHit;
-      all += n;
-      for (uint32_t i = 0; i < n; ++i) {
-        const uint32_t code = gather.hits[firstHit + i];
-        if (code == TexelGather::kNoHit) ++misses;
-        else if (!(code & TexelGather::kFar)) ++near;
-        else if (i < gather.fullRays[t]) ++farFull;
-      }
-    }
-    if (all == 0) return;
-    const double farMass = double(all - near - misses) / double(all);
-    // No full ray went far although others did: their share stays with the near hits.
-    const double nearWeight = farFull > 0 || near == 0 ? 1.0 / double(all)
-                                                       : (1.0 - double(misses) / all) / near;
-    const double farWeight = farFull > 0 ? farMass / double(farFull) : 0.0;
-    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
-      const uint32_t t = gather.pointTexels[k];
-      const uint32_t firstHit = gather.hitStart[t], n = gather.hitStart[t + 1] - firstHit;
-      for (uint32_t i = 0; i < n; ++i) {
-        const uint32_t code = gather.hits[firstHit + i];
-        const bool inNearField = !(code & TexelGather::kFar);
-        if (!inNearField && i >= gather.fullRays[t]) continue;  // counted by the full rays
-        const uint32_t c = targetOf(code, t);
-        if (c == kNoTexel) continue;
-        const double w = (inNearField ? nearWeight : farWeight) *
-                         albedoDetail(firstHit + i, code, c & ~kFarHit);
-        visit(c & ~kFarHit, w, i, c >= kFarHit);
-      }
-    }
-  };
-  // Per gather point and light channel, the mean light its far hits' targets receive
-  // directly (a far cluster: its clusters' area-weighted mean), for the far fields' sharing.
-  const size_t channels = light.channels.size();
-  std::vector<float> farLight;
-  if (channels > 0 && !far.empty() && options.sharedFarSpan > 1 &&
-      options.sharedFarLightRatio > 1.0f) {
-    const runtime::SparseMatrix& mix = transport.farClusters;
-    std::vector<float> targetLight(size_t(clusterCount + mix.rows()) * channels, 0.0f);
-    for (size_t ch = 0; ch < channels; ++ch) {
-      for (uint32_t c = 0; c < clusterCount; ++c)
-        targetLight[c * channels + ch] = light.channels[ch][c];
-      for (size_t f = 0; f < mix.rows(); ++f) {
-        double sum = 0.0;
-        for (uint32_t k = mix.rowStart[f]; k < mix.rowStart[f + 1]; ++k)
-          sum += double(mix.weight[k]) * double(light.channels[ch][mix.column[k]]);
-        targetLight[(clusterCount + f) * channels + ch] = float(sum);
-      }
-    }
-    farLight.assign(size_t(points) * channels, 0.0f);
-    parallelFor(points, [&](size_t p) {
-      std::vector<double> sum(channels, 0.0);
-      double weight = 0.0;
-      pointHits(uint32_t(p), [&](uint32_t c, double w, uint32_t, bool farHit) {
-        if (!farHit) return;
-        weight += w;
-        for (size_t ch = 0; ch < channels; ++ch)
-          sum[ch] += w * double(targetLight[c * channels + ch]);
-      });
-      if (weight > 0.0)
-        for (size_t ch = 0; ch < channels; ++ch)
-          farLight[p * channels + ch] = float(sum[ch] / weight);
-    }, 1024);
-  }
-  // Two points may share a far field when their far hits receive alike light in every channel
-  // (LinkOptions::sharedFarLightRatio).
-  const float shareRatio = options.sharedFarLightRatio;
-  // A fifth of ClusterLight's floor (a hundredth of the channel's mean): a point whose far hits
-  // are all in shade must not take a far field with some sun in it. Between shaded far fields
-  // the difference is their bounced light, which this check cannot see, and on Sponza-sun at 8
-  // texels/m a point under a ledge took its neighbours' far field, 20 times its own.
-  constexpr float kSharedFloor = 0.2f;
-  auto farLitAlike = [&](uint32_t a, uint32_t b) {
-    if (farLight.empty()) return true;
-    for (size_t ch = 0; ch < channels; ++ch) {
-      const float x = farLight[a * channels + ch], y = farLight[b * channels + ch];
-      if (std::max(x, y) > shareRatio * std::min(x, y) + kSharedFloor * light.floors[ch])
-        return false;
-    }
-    return true;
-  };
+  const PointHits hits(texels, gather, clusters, far, transport);
+  const std::vector<float> farLight =
+      farLightOfPoints(hits, points, light, far, transport, options);
   // (Without far clusters there is no far field to share.)
-  const FarGroups groups = shareFarFields(tracer, texels, gather,
-                                          far.empty() ? 0 : options.sharedFarSpan, farLitAlike);
+  const FarGroups groups =
+      shareFarFields(tracer, texels, gather, far.empty() ? 0 : options.sharedFarSpan,
+                     FarLitAlike(farLight, light, options.sharedFarLightRatio));
   const uint32_t sharedBase = transport.sharedFarBase();
   const uint64_t targetCount = uint64_t(sharedBase) + groups.size();
   if (targetCount > runtime::kMaxLinkTargets)
@@ -627,161 +927,21 @@ Status computeLinks(const scenes::Scene& scene, const trace::RayTracer& tracer, 
         "%llu clusters, far clusters and shared far fields, more than the transport's links can "
         "address (%u): raise --cluster-size or --cluster-texels, or lower --texels-per-unit",
         (unsigned long long)targetCount, runtime::kMaxLinkTargets));
-  // A point's row: its hits, except that a point sharing a far field links that field with
-  // the weight of its own hits on far clusters instead of linking them one by one.
-  auto pointRow = [&](uint32_t p, RowBuilder& row) {
-    const uint32_t group = groups.ofPoint[p];
-    double shared = 0.0;
-    pointHits(p, [&](uint32_t c, double w, uint32_t, bool farHit) {
-      if (group != kNoTexel && farHit) shared += w;
-      else row.add(c, w);
-    });
-    if (shared > 0.0) row.add(sharedBase + group, shared);
-  };
-  // A shared far field: its points' hits on far clusters, as they weigh in their own rows
-  // (each point's rays count alike). A pool of texels near other geometry (up to sharedFarSpan²
-  // points) is thinned to about sharedFarPoints × texelRays rays: the group's rays interleaved
-  // (ray i of the group's k-th point is ray i × m + k of the group) and an even share of them
-  // kept; as every point casts texelRays full rays, that keeps whole points' sets, each a
-  // stratified set of its own. A fraction, not every n-th: sharedFarPoints then sets the
-  // links' count smoothly. A pool of 2×2 blocks keeps four points' rays, every ray of a square
-  // of four full blocks, whose rays together are one stratified set of their tile's sequence
-  // (sampling::TiledSobol), while three blocks' worth left the field that the square's points
-  // share erring alike over the square, a blotch (the Cornell box's ceiling: 1.0% band-passed
-  // against 0.8%, for 3% more links on Sponza). Normalised where it is built.
-  const uint64_t sharedRays = uint64_t(std::max(1.0f, options.sharedFarPoints * float(rays)));
-  const uint64_t blockRays = 4 * uint64_t(rays);
-  auto sharedRow = [&](uint32_t g, RowBuilder& row) {
-    const uint32_t first = groups.start[g], m = groups.start[g + 1] - first;
-    uint64_t pooled = 0;
-    for (uint32_t k = first; k < first + m; ++k) {
-      const uint32_t p = groups.points[k];
-      for (uint32_t i = gather.pointStart[p]; i < gather.pointStart[p + 1]; ++i)
-        pooled += gather.fullRays[gather.pointTexels[i]];
-    }
-    const uint32_t anchor = groups.points[first];
-    const bool blocks = gather.pointStart[anchor + 1] - gather.pointStart[anchor] > 1;
-    const uint64_t keep = std::min(blocks ? blockRays : sharedRays, pooled);
-    for (uint32_t k = first; k < first + m; ++k) {
-      pointHits(groups.points[k], [&](uint32_t c, double w, uint32_t ray, bool farHit) {
-        const uint64_t i = uint64_t(ray) * m + (k - first);
-        if (farHit && (i + 1) * keep / pooled > i * keep / pooled) row.add(c, w);
-      });
-    }
-  };
-  // A back cluster: rays of its own from behind its texels, as many as they would cast from the
-  // front (up to clusterRays), round robin, each texel stratifying its share.
-  const uint32_t clusterRays = uint32_t(options.clusterRays);
-  auto backRayCount = [&](uint32_t c) {
-    const uint64_t m = clusters.firstTexel[c + 1] - clusters.firstTexel[c];
-    return uint32_t(std::min<uint64_t>(clusterRays, uint64_t(rays) * m));
-  };
-  auto queueBackRays = [&](uint32_t c, GatherBatch& batch) {
-    const uint32_t first = clusters.firstTexel[c], m = clusters.firstTexel[c + 1] - first;
-    const uint32_t count = backRayCount(c);
-    const sampling::Rng::ItemSeed seed{sampling::Rng::itemSeed(sampling::Stream::ClusterLinks, c)};
-    // Ray s belongs to member s % m as its (s / m)-th: queued member by member (one frame and
-    // one stratification each; the members' shares differ by one at most).
-    const uint32_t share = count / m, extra = count % m;
-    const sampling::Stratified more(share + 1), fewer(std::max(share, 1u));
-    for (uint32_t i = 0; i < std::min(m, count); ++i) {
-      const uint32_t t = clusters.memberTexels[first + i];
-      const uint32_t localCount = share + (i < extra ? 1 : 0);
-      const sampling::Stratified& strata = i < extra ? more : fewer;
-      const sampling::Frame frame(-texels.normal[t]);
-      const glm::vec3 origin = texels.backPosition(t), geometricNormal = -texels.geometricNormal[t];
-      for (uint32_t local = 0; local < localCount; ++local) {
-        sampling::Rng rng(seed, local * m + i);
-        batch.add(origin, frame, geometricNormal, strata.point(rng, local));
-      }
-    }
-  };
-  // The back clusters' rays are traced first, several clusters to a batch (a cluster casts a
-  // few hundred rays; Embree's coherent streams and the hit lookup's prefetching do better on
-  // a thousand or more), their hit codes kept for the rows and their sky transfer stored.
-  std::vector<uint32_t> backStart(backClusters.size() + 1, 0);
-  for (size_t i = 0; i < backClusters.size(); ++i)
-    backStart[i + 1] = backStart[i] + backRayCount(backClusters[i]);
-  std::vector<uint32_t> backCodes(backStart.back());
-  const TexelLookup lookup(texels);
-  const size_t rowCount = size_t(points) + backClusters.size();
-  progress.begin(stageName(Stage::Links), backClusters.size() + groups.size() + rowCount);
-  parallelForBlocks(backClusters.size(), [&](size_t begin, size_t end, int) {
-    constexpr size_t kRaysPerBatch = 1024;
-    GatherBatch batch;  // its per-geometry cache is valid for this bake's tracer only
-    for (size_t i = begin; i < end && !progress.cancelled();) {
-      batch.clear();
-      const size_t firstCluster = i;
-      for (; i < end && batch.size() < kRaysPerBatch; ++i) queueBackRays(backClusters[i], batch);
-      batch.trace(tracer, texels, &lookup);
-      std::copy(batch.codes().begin(), batch.codes().end(),
-                backCodes.begin() + backStart[firstCluster]);
-      for (size_t j = firstCluster; j < i; ++j) {
-        const uint32_t from = backStart[j] - backStart[firstCluster];
-        const uint32_t count = backStart[j + 1] - backStart[j];
-        const GatherBatch::Summary seen = batch.summarize(tracer, from, from + count);
-        for (int k = 0; k < kShCount; ++k)
-          transport.clusterSky[size_t(backClusters[j]) * kShCount + size_t(k)] =
-              runtime::floatToHalf(float(seen.sky[k] * (1.0 / double(count))));
-      }
-    }
-    progress.advance(end - begin);
-  }, 16);
-  auto backRow = [&](size_t i, RowBuilder& row) {
-    const double weight = 1.0 / double(backStart[i + 1] - backStart[i]);
-    for (uint32_t k = backStart[i]; k < backStart[i + 1]; ++k) {
-      const uint32_t target = clusterOf(backCodes[k]);
-      if (target != kNoTexel) row.add(target, weight);
-    }
-  };
-  buildRows(
-      groups.size(), sharedBase, progress, [&] { return RowBuilder(sharedBase); },
-      [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
-        sharedRow(uint32_t(r), row);
-        row.finish(options.minWeight, links);
-        double sum = 0.0;
-        for (const Link& l : links) sum += double(l.weight);
-        for (Link& l : links) l.weight = float(double(l.weight) / sum);
-      },
-      transport.sharedFar, 64);
-  buildRows(
-      rowCount, uint32_t(targetCount), progress, [&] { return RowBuilder(uint32_t(targetCount)); },
-      [&](size_t r, RowBuilder& row, std::vector<Link>& links) {
-        if (r < points) pointRow(uint32_t(r), row);
-        else backRow(r - points, row);
-        row.finish(options.minWeight, links);
-      },
-      transport.links, 256);
+
+  // The rows: the back clusters' rays first, then the shared far fields, then the points' and
+  // the back clusters' rows.
+  BackRays back = planBackRays(clusters, gather.raysPerTexel, uint32_t(options.clusterRays));
+  const size_t rowCount = size_t(points) + back.clusters.size();  // the links' rows
+  progress.begin(stageName(Stage::Links), back.clusters.size() + groups.size() + rowCount);
+  traceBackRays(tracer, texels, clusters, back, transport, progress);
+  const LinkRows rows(gather, clusters, hits, groups, back, sharedBase, options);
+  rows.buildShared(progress, transport.sharedFar);
+  rows.buildLinks(uint32_t(targetCount), progress, transport.links);
   progress.end();
   if (progress.cancelled()) return Status::error("cancelled");
 
-  // Sky transfer per texel (its gather point's, as half floats) and per front cluster (the
-  // area-weighted mean over its texels).
-  transport.texelSky.assign(size_t(texelCount) * kShCount, 0);
-  parallelFor(texelCount, [&](size_t t) {
-    if (texels.valid[t])
-      for (int i = 0; i < kShCount; ++i)
-        transport.texelSky[t * kShCount + size_t(i)] =
-            runtime::floatToHalf(gather.sky[t * kShCount + size_t(i)]);
-  }, 4096);
-  // What each cluster gathers: its texels' gather points, area-weighted (a back cluster: its
-  // own row).
-  std::vector<uint32_t> backRowOf(clusterCount, kNoTexel);
-  for (size_t i = 0; i < backClusters.size(); ++i)
-    backRowOf[backClusters[i]] = points + uint32_t(i);
-  transport.clusterGather = runtime::normalisedRows(clusterCount, [&](size_t c, auto& entries) {
-    const uint32_t first = clusters.firstTexel[c], last = clusters.firstTexel[c + 1];
-    if (clusters.back[c]) {
-      if (backRowOf[c] != kNoTexel) entries.emplace_back(backRowOf[c], 1.0f);
-      return;
-    }
-    const double area = memberArea(c);
-    for (uint32_t k = first; k < last; ++k) {
-      const uint32_t t = clusters.memberTexels[k];
-      if (gather.pointOfTexel[t] == TexelGather::kNoHit) continue;
-      entries.emplace_back(gather.pointOfTexel[t], float(shareOf(t, area, last - first)));
-    }
-  }, blockRanges());
+  storeTexelSky(texels, gather, transport);
+  transport.clusterGather = clusterGather(texels, gather, clusters, back);
   // How texels read the gather points and how the points smooth each other, built by the
   // runtime from what the transport file stores (so a loaded file has the very same maps).
   transport.filterPasses = std::max(0, options.filterPasses);

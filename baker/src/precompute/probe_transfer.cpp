@@ -25,9 +25,10 @@
 #include "afterglow/runtime/probe_sh.h"
 #include "shading/emitters.h"
 #include "precompute/far_targets.h"
-#include "precompute/gather_rays.h"
+#include "precompute/gather_batch.h"
 #include "shading/light_model.h"
 #include "precompute/probe_directions.h"
+#include "precompute/texel_lookup.h"
 #include "shading/sampling.h"
 
 namespace afterglow::baker {
