@@ -3,7 +3,8 @@
 // and sunlit floor beyond. The gather rays of the shaded face's bottom texels land on that strip
 // a few centimetres away, inside floor texels whose samples, 12 cm from the wall, are in the
 // sun. Taking those texels' light made such texels several times too bright on Sponza; with the
-// light check (TexelOfHit::lightMatch) the bake must agree with the reference path tracer.
+// light check (TexelOfHit::needsLightMatch in precompute/texel_of_hit.h) the bake must agree
+// with the reference path tracer.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -63,8 +63,8 @@ struct TexelGather {
   std::vector<uint8_t> backSeen;
   std::vector<float> backHarmonicDistance;
   // Per texel, the lights its sample sees (LightVisibility): how the gather's hits were
-  // light-matched (TexelOfHit::lightMatch), kept for refineGather's rays. Empty without the
-  // check.
+  // light-matched (TexelOfHit::needsLightMatch in precompute/texel_of_hit.h), kept for
+  // refineGather's rays. Empty without the check.
   std::vector<uint32_t> lightsReached;
 
   // Gather points (runtime::TransportData): blocks of up to 2×2 texels on one surface whose
