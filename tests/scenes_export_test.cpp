@@ -440,6 +440,32 @@ TEST(GltfExport, SingleSidedEmissionRoundTrip) {
   EXPECT_TRUE(warned);
 }
 
+// KHR_materials_transmission and alphaMode BLEND survive the round trip (the bake's output
+// glTF keeps its glass).
+TEST(GltfExport, TransmissionRoundTrip) {
+  Scene scene = decoratedCornellBox();
+  ASSERT_GE(scene.materials.size(), 2u);
+  scene.materials[0].transmissionFactor = 0.75f;
+  scene.materials[0].transmissionTexture.texture = scene.materials[0].baseColorTexture.texture;
+  scene.materials[1].alphaMode = AlphaMode::Blend;
+  scene.materials[1].baseColorFactor.a = 0.4f;
+  const std::string dir = test::tempDir("export_transmission");
+  ASSERT_TRUE(saveGltf(scene, dir + "/t.gltf").isOk());
+  Result<Scene> back = loadGltf(dir + "/t.gltf");
+  ASSERT_TRUE(back.isOk()) << back.message();
+  EXPECT_EQ(back->materials[0].transmissionFactor, 0.75f);
+  EXPECT_EQ(back->materials[0].transmissionTexture.valid(),
+            scene.materials[0].transmissionTexture.valid());
+  EXPECT_EQ(back->materials[1].alphaMode, AlphaMode::Blend);
+  EXPECT_FLOAT_EQ(back->materials[1].baseColorFactor.a, 0.4f);
+  EXPECT_EQ(back->materials[1].transmissionFactor, 0.0f);
+  const json doc = readJson(dir + "/t.gltf");
+  EXPECT_EQ(doc["materials"][0]["extensions"]["KHR_materials_transmission"]["transmissionFactor"],
+            0.75);
+  EXPECT_FALSE(doc["materials"][1].contains("extensions") &&
+               doc["materials"][1]["extensions"].contains("KHR_materials_transmission"));
+}
+
 // What the importer does not model (accessor bounds, component types, the lightmap record) is
 // checked in the JSON itself.
 TEST(GltfExport, WritesTheExpectedJson) {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "afterglow/scenes/gltf.h"
+#include "afterglow/scenes/material_eval.h"
 #include "test_util.h"
 
 namespace afterglow::scenes {
@@ -523,6 +524,66 @@ TEST(GltfImport, SpecularAndIorOutOfRangeWarn) {
   size_t materialWarnings = 0;
   for (const std::string& w : r->warnings) materialWarnings += w.find("material '") != std::string::npos;
   EXPECT_EQ(materialWarnings, 7u);
+}
+
+// KHR_materials_transmission: its factor and texture (the transmission in the red channel of a
+// linear texture), clamped with a warning out of range; and what material_eval makes of it and
+// of alphaMode BLEND: the light that passes, tinted by the base colour.
+TEST(GltfImport, TransmissionFactorTextureAndWhatPasses) {
+  const std::string dir = test::tempDir("gltf_import_transmission");
+  writeGreyPng(dir + "/t.png");
+  Builder b;
+  int pos = b.positions(kTriangle);
+  b.mesh(json::array({{{"attributes", {{"POSITION", pos}}}, {"material", 0}}}));
+  b.node({{"mesh", 0}});
+  b.scene({0});
+  b.j["extensionsUsed"] = {"KHR_materials_transmission"};
+  b.j["images"] = json::array({{{"uri", "t.png"}}});
+  b.j["textures"] = json::array({{{"source", 0}}});
+  const json tinted = {{"baseColorFactor", {0.5, 1.0, 0.25, 0.4}}};
+  b.j["materials"] = json::array(
+      {{{"name", "Textured"},
+        {"pbrMetallicRoughness", tinted},
+        {"extensions",
+         {{"KHR_materials_transmission",
+           {{"transmissionFactor", 0.8}, {"transmissionTexture", {{"index", 0}}}}}}}},
+       {{"name", "TooMuch"},
+        {"extensions", {{"KHR_materials_transmission", {{"transmissionFactor", 1.5}}}}}},
+       {{"name", "Blend"}, {"alphaMode", "BLEND"}, {"pbrMetallicRoughness", tinted}},
+       {{"name", "BlendAndTransmission"},
+        {"alphaMode", "BLEND"},
+        {"pbrMetallicRoughness", tinted},
+        {"extensions", {{"KHR_materials_transmission", {{"transmissionFactor", 0.5}}}}}},
+       {{"name", "Mask"}, {"alphaMode", "MASK"}, {"pbrMetallicRoughness", tinted}},
+       {{"name", "OpaqueBlend"}, {"alphaMode", "BLEND"}}});
+  auto r = loadGltfFromMemory(b.gltf(), "t.gltf", dir);
+  ASSERT_TRUE(r) << r.message();
+  ASSERT_EQ(r->materials.size(), 6u);
+  const Material& m = r->materials[0];
+  EXPECT_FLOAT_EQ(m.transmissionFactor, 0.8f);
+  ASSERT_TRUE(m.transmissionTexture.valid());
+  EXPECT_FALSE(r->textures[size_t(m.transmissionTexture.texture)].srgb);
+  EXPECT_EQ(r->materials[1].transmissionFactor, 1.0f);
+  EXPECT_TRUE(hasWarning(*r, "t.gltf: material 'TooMuch'", "transmissionFactor 1.5 is outside"));
+  EXPECT_FALSE(hasWarning(*r, "used but ignored"));
+  // The texture's first texel is a linear 0.5: 0.8 × 0.5 passes, tinted by the base colour
+  // (OPAQUE: its alpha does not count).
+  const Transmission textured = transmission(*r, 0, glm::vec2(0.25f, 0.5f));
+  EXPECT_NEAR(textured.open, 0.4f, 1e-3f);
+  expectVec(textured.tint, glm::vec3(0.5f, 1.0f, 0.25f));
+  EXPECT_NEAR(textured.grey(), 0.4f * 1.75f / 3.0f, 1e-3f);
+  // BLEND lets 1 − alpha through; with transmission 1 − alpha × (1 − transmission).
+  EXPECT_NEAR(transmission(*r, 2, {}).open, 0.6f, 1e-6f);
+  expectVec(transmission(*r, 2, {}).rgb(), 0.6f * glm::vec3(0.5f, 1.0f, 0.25f));
+  EXPECT_NEAR(transmission(*r, 3, {}).open, 0.8f, 1e-6f);
+  EXPECT_EQ(transmission(*r, 2, {}, false).open, 0.0f);  // BLEND cut out as MASK instead
+  // MASK and OPAQUE alphas, and a BLEND of alpha 1, let nothing through.
+  EXPECT_EQ(transmission(*r, 4, {}).open, 0.0f);
+  EXPECT_FALSE(transmissive(*r, 4));
+  EXPECT_FALSE(transmissive(*r, 5));
+  EXPECT_FALSE(transmissive(*r, -1));
+  for (int k : {0, 1, 2, 3}) EXPECT_TRUE(transmissive(*r, k)) << k;
+  EXPECT_FALSE(transmissive(*r, 2, false));
 }
 
 TEST(GltfImport, EmbeddedEightBitImagesUseTheExactSrgbCurve) {

@@ -345,6 +345,15 @@ struct Exporter {
         jm["extensions"]["KHR_materials_specular"] = std::move(specular);
         extensionsUsed.insert("KHR_materials_specular");
       }
+      json transmission = json::object();
+      if (mat.transmissionFactor != 0.0f)
+        transmission["transmissionFactor"] = num(mat.transmissionFactor);
+      if (json t = textureInfo(mat.transmissionTexture); !t.is_null())
+        transmission["transmissionTexture"] = std::move(t);
+      if (!transmission.empty()) {
+        jm["extensions"]["KHR_materials_transmission"] = std::move(transmission);
+        extensionsUsed.insert("KHR_materials_transmission");
+      }
       if (mat.alphaMode == AlphaMode::Mask) {
         jm["alphaMode"] = "MASK";
         jm["alphaCutoff"] = num(mat.alphaCutoff);
@@ -559,9 +568,9 @@ Status saveGltf(const Scene& scene, const std::string& path, const SaveOptions& 
   if (!ex.extensionsUsed.empty())
     ex.doc["extensionsUsed"] = std::vector<std::string>(ex.extensionsUsed.begin(),
                                                         ex.extensionsUsed.end());
-  // Lights, emissive strength, ior and specular degrade gracefully in a viewer that lacks them;
-  // a texture transform that is not the identity does not (the textures would land in the wrong
-  // place), so only that one is required, as the source files that use it do.
+  // Lights, emissive strength, ior, specular and transmission degrade gracefully in a viewer
+  // that lacks them; a texture transform that is not the identity does not (the textures would
+  // land in the wrong place), so only that one is required, as the source files that use it do.
   if (ex.transformRequired) ex.doc["extensionsRequired"] = {"KHR_texture_transform"};
 
   const std::string text = glb ? ex.doc.dump() : ex.doc.dump(1);

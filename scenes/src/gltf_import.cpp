@@ -50,7 +50,8 @@ constexpr size_t kMaxWarnings = 500;  // a broken file must not produce millions
 const std::set<std::string>& supportedExtensions() {
   static const std::set<std::string> kSupported = {
       "KHR_lights_punctual", "KHR_texture_transform", "KHR_materials_emissive_strength",
-      "KHR_materials_ior", "KHR_materials_specular", "KHR_mesh_quantization"};
+      "KHR_materials_ior", "KHR_materials_specular", "KHR_materials_transmission",
+      "KHR_mesh_quantization"};
   return kSupported;
 }
 
@@ -985,6 +986,8 @@ class Importer {
       if (!s) return s;
       s = importSpecular(src, where, m);
       if (!s) return s;
+      s = importTransmission(src, where, m);
+      if (!s) return s;
       scene_.materials.push_back(std::move(m));
     }
     return Status::ok();
@@ -1071,6 +1074,32 @@ class Importer {
     if (!s) return s;
     return extensionTexture(ext, "specularColorTexture", where + " KHR_materials_specular", true,
                             m.specularColorTexture);
+  }
+
+  // KHR_materials_transmission: the light that passes through the surface (material_eval.h,
+  // transmission). A factor outside [0, 1] is clamped into it with a warning.
+  Status importTransmission(const tinygltf::Material& src, const std::string& where,
+                            Material& m) {
+    auto found = src.extensions.find("KHR_materials_transmission");
+    if (found == src.extensions.end()) return Status::ok();
+    const tinygltf::Value& ext = found->second;
+    if (!ext.IsObject()) {
+      warn(where + ": KHR_materials_transmission is not an object, ignored");
+      return Status::ok();
+    }
+    if (const tinygltf::Value* v = member(ext, "transmissionFactor")) {
+      const double x = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
+      if (!std::isfinite(x)) {
+        warn(where + ": KHR_materials_transmission transmissionFactor is not a number, 0 used");
+      } else {
+        m.transmissionFactor = narrow(std::clamp(x, 0.0, 1.0));
+        if (x < 0.0 || x > 1.0)
+          warn(format("%s: KHR_materials_transmission transmissionFactor %g is outside [0, 1], "
+                      "%g used", where.c_str(), x, double(m.transmissionFactor)));
+      }
+    }
+    return extensionTexture(ext, "transmissionTexture", where + " KHR_materials_transmission",
+                            false, m.transmissionTexture);
   }
 
   void decodeTextures() {

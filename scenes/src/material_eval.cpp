@@ -167,4 +167,33 @@ glm::vec3 emittedRadiance(const Scene& scene, int material, glm::vec2 uv0) {
   return m.emission() * textureRgb(scene, m.emissiveTexture, uv0);
 }
 
+Transmission transmission(const Scene& scene, int material, glm::vec2 uv0, bool blend) {
+  const Material& m = scene.material(material);
+  Transmission t;
+  const float alpha = blend && m.alphaMode == AlphaMode::Blend
+                          ? m.baseColorFactor.a * textureAlpha(scene, m.baseColorTexture, uv0)
+                          : 1.0f;
+  const float passes = m.transmissionFactor > 0.0f
+                           ? m.transmissionFactor *
+                                 textureRgb(scene, m.transmissionTexture, uv0).r
+                           : 0.0f;
+  const float covered = glm::clamp(alpha, 0.0f, 1.0f), opaque = 1.0f - glm::clamp(passes, 0.0f, 1.0f);
+  t.open = glm::clamp(1.0f - covered * opaque, 0.0f, 1.0f);
+  if (t.open > 0.0f)
+    t.tint = glm::clamp(glm::vec3(m.baseColorFactor) * textureRgb(scene, m.baseColorTexture, uv0),
+                        glm::vec3(0.0f), glm::vec3(1.0f));
+  return t;
+}
+
+bool transmissive(const Scene& scene, int material, bool blend) {
+  const Material& m = scene.material(material);
+  if (m.transmissionFactor > 0.0f) return true;
+  if (!blend || m.alphaMode != AlphaMode::Blend) return false;
+  if (m.baseColorFactor.a < 1.0f) return true;
+  const TextureRef& ref = m.baseColorTexture;
+  if (!ref.valid() || size_t(ref.texture) >= scene.textures.size()) return false;
+  const std::vector<glm::vec4>& texels = scene.textures[size_t(ref.texture)].texels;
+  return std::any_of(texels.begin(), texels.end(), [](const glm::vec4& c) { return c.a < 1.0f; });
+}
+
 }  // namespace afterglow::scenes

@@ -63,4 +63,30 @@ SurfaceBrdf surfaceBrdf(const Scene& scene, int material, glm::vec2 uv0);
 // Emitted radiance of a material at a UV, linear RGB.
 glm::vec3 emittedRadiance(const Scene& scene, int material, glm::vec2 uv0);
 
+// What a surface lets through at a point, glass: alphaMode BLEND lets 1 − alpha through (alpha =
+// baseColorFactor.a × baseColorTexture.a), KHR_materials_transmission its transmission
+// (transmissionFactor × transmissionTexture.r), a material with both 1 − alpha × (1 −
+// transmission); what passes is tinted by the base colour (baseColorFactor.rgb ×
+// baseColorTexture.rgb). The rest, 1 − open, meets the surface, which reflects it with its
+// bounce albedo as an opaque surface would: BLEND glass reflects its alpha's share, as an engine
+// blends it. MASK cut-outs are no transmission (the ray tracer takes them out below
+// alphaCutoff; above it, alpha counts as 1), nor is an OPAQUE material's alpha.
+struct Transmission {
+  float open = 0.0f;     // the fraction of light that passes, [0, 1]
+  glm::vec3 tint{1.0f};  // its colour, linear RGB
+  // The light that passes, per channel: what the reference path tracer carries.
+  glm::vec3 rgb() const { return open * tint; }
+  // The same as one number, the mean over the channels: what the precompute carries, since
+  // its transport is scalar per source and per link. Exact for neutral glass; for tinted glass
+  // white light keeps its power through it, and its colour is the light's own.
+  float grey() const { return open * (tint.x + tint.y + tint.z) / 3.0f; }
+};
+// `blend`: whether alphaMode BLEND counts (false where BLEND is cut out as MASK instead:
+// trace::RayTracerOptions::blendAsMask).
+Transmission transmission(const Scene& scene, int material, glm::vec2 uv0, bool blend = true);
+// Whether transmission can let anything through anywhere on a material: BLEND with an alpha
+// below 1 (its factor's, or some texel's of its base colour texture), or a transmissionFactor
+// above 0. False for every other material, whose surfaces are opaque.
+bool transmissive(const Scene& scene, int material, bool blend = true);
+
 }  // namespace afterglow::scenes

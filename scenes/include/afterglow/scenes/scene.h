@@ -67,6 +67,10 @@ struct Material {
   TextureRef specularTexture;
   glm::vec3 specularColorFactor{1.0f};  // linear RGB
   TextureRef specularColorTexture;
+  // KHR_materials_transmission: the fraction of light that passes through the surface, [0, 1],
+  // × transmissionTexture.r (linear), tinted by the base colour (material_eval.h, transmission).
+  float transmissionFactor = 0.0f;
+  TextureRef transmissionTexture;
   TextureRef normalTexture;             // kept for export; not used for lighting
   TextureRef occlusionTexture;          // kept for export; not used for lighting
   glm::vec3 emissiveFactor{0.0f};       // linear RGB
