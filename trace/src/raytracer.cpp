@@ -37,6 +37,14 @@ struct Geometry {
   const scenes::Texture* alphaTexture = nullptr;     // null: baseColorFactor.a alone
   const scenes::TextureRef* alphaRef = nullptr;
   const std::vector<glm::vec2>* alphaUv = nullptr;   // the UV set the texture reads
+  // Glass (filters are installed when transmissive): what passes, everywhere when untextured,
+  // else evaluated at the hit (scenes::transmission; `blend`: BLEND counts, not cut out).
+  bool transmissive = false;
+  bool transmissionTextured = false;
+  bool blend = true;
+  scenes::Transmission transmission;
+  const scenes::Scene* scene = nullptr;
+  int material = -1;
   // TEXCOORD_1 at each triangle's corners, three in a row (empty without the set): a hit's
   // lightmap UV in one cache line, where the index and vertex buffers cost two misses in a row
   // (the gather looks up the texel of every hit).
@@ -56,18 +64,148 @@ struct Geometry {
     }
     return a;
   }
+
+  scenes::Transmission transmissionAt(uint32_t triangle, float u, float v) const {
+    if (!transmissionTextured) return transmission;
+    glm::vec2 uv0(0.0f);
+    if (source->uv0.size() == source->positions.size()) {
+      const uint32_t* t = indices + 3 * size_t(triangle);
+      const std::vector<glm::vec2>& uv = source->uv0;
+      uv0 = (1.0f - u - v) * uv[t[0]] + u * uv[t[1]] + v * uv[t[2]];
+    }
+    return scenes::transmission(*scene, material, uv0, blend);
+  }
 };
 
-// Shared by the intersection and occlusion filters: rejecting a candidate hit makes Embree
-// continue traversal past it.
-void alphaFilter(const RTCFilterFunctionNArguments* args) {
+// What a query does at glass (Glass, and the transmittance queries), for the filters.
+enum class AtGlass : uint8_t {
+  Stop,           // Glass::Solid: every hit counts
+  Chance,         // Glass::Light intersect: pass, stop or absorb by the ray's own chance
+  Open,           // Glass::Light occluded: pass wherever light gets through
+  Transmittance,  // pass, multiplying the ray's Layers by what gets through
+};
+
+uint32_t floatBits(float f) {
+  uint32_t b;
+  std::memcpy(&b, &f, sizeof(b));
+  return b;
+}
+
+// A ray's crossing of a surface: Embree may call a filter more than once for one triangle
+// (with spatial splits, RTC_BUILD_QUALITY_HIGH), and a ray through the edge two triangles
+// share meets both at one distance; each is one crossing of the surface, which counts once.
+// Crossings of one geometry within 3·10⁻⁵ of the distance are one.
+struct Crossing {
+  uint32_t geometry;
+  float t;
+  bool same(const Crossing& o) const {
+    return geometry == o.geometry && std::abs(t - o.t) <= 3e-5f * std::max(t, o.t);
+  }
+  // As a key (the distance rounded to 2⁻¹⁵ of itself), for the ray's random number there.
+  uint64_t key() const { return (uint64_t(geometry) << 32) | ((floatBits(t) + 0x80u) >> 8); }
+};
+
+// One ray's transmittance so far, and the crossings that made it.
+struct Layers {
+  static constexpr int kMax = 16;
+  glm::vec3 value{1.0f};
+  int count = 0;
+  Crossing seen[kMax];
+
+  void clear() {
+    value = glm::vec3(1.0f);
+    count = 0;
+  }
+  // Multiplies in a crossing's share, once; false when the ray is blocked.
+  bool add(const Crossing& at, glm::vec3 share) {
+    for (int k = 0; k < count; ++k)
+      if (seen[k].same(at)) return true;
+    if (count == kMax) return false;
+    seen[count++] = at;
+    value *= share;
+    return value != glm::vec3(0.0f);
+  }
+};
+
+// Embree's context extended with what the filters need (Embree passes filters the pointer it
+// was given, so the extension rides along; the documented way to hand filters per-query data).
+struct Context {
+  RTCIntersectContext embree;  // first
+  AtGlass atGlass = AtGlass::Stop;
+  bool grey = false;           // Transmittance: each surface's grey share, else its RGB one
+  Layers* layers = nullptr;    // Transmittance: per ray, by the ray's id
+  // Chance: per ray, by its id, the nearest distance at which it passed glass (∞: none yet).
+  // Embree offers candidates in no order, so one beyond the ray's hit may have passed too.
+  float* passedAt = nullptr;
+
+  explicit Context(AtGlass at,
+                   RTCIntersectContextFlags flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT)
+      : atGlass(at) {
+    rtcInitIntersectContext(&embree);
+    embree.flags = flags;
+  }
+};
+
+AtGlass atGlass(Glass glass, RayTracer::Query query) {
+  if (glass == Glass::Solid) return AtGlass::Stop;
+  return query == RayTracer::Query::Intersect ? AtGlass::Chance : AtGlass::Open;
+}
+
+// The ray's own random number in [0, 1) at one crossing of a surface: a hash of its origin,
+// direction and the crossing, so the same ray meets the same fate on any thread, however often
+// Embree asks, and (but where the rounding splits the two distances) one fate at the edge two
+// triangles share.
+float chance(glm::vec3 origin, glm::vec3 direction, const Crossing& at) {
+  uint64_t h = mix64(at.key());
+  for (int k = 0; k < 3; ++k)
+    h = mix64(h ^ ((uint64_t(floatBits(origin[k])) << 32) | floatBits(direction[k])));
+  return float(h >> 40) * (1.0f / 16777216.0f);
+}
+
+// What a ray whose chance is u does at a surface that lets `t` through: it stops (the surface
+// reflects) with probability 1 − open, passes with the grey transmittance, else is absorbed.
+enum class Fate : uint8_t { Stop, Pass, Absorb };
+Fate fateOf(float u, const scenes::Transmission& t) {
+  const float stop = 1.0f - t.open;
+  if (u < stop) return Fate::Stop;
+  return u < stop + t.grey() ? Fate::Pass : Fate::Absorb;
+}
+
+// Shared by the intersection and occlusion filters of alpha-tested and transmissive
+// geometries: rejecting a candidate hit makes Embree continue traversal past it.
+void surfaceFilter(const RTCFilterFunctionNArguments* args) {
   const auto* geometry = static_cast<const Geometry*>(args->geometryUserPtr);
-  for (unsigned i = 0; i < args->N; ++i) {
+  const auto* context = reinterpret_cast<const Context*>(args->context);
+  const unsigned n = args->N;
+  for (unsigned i = 0; i < n; ++i) {
     if (args->valid[i] != -1) continue;
-    const uint32_t triangle = RTCHitN_primID(args->hit, args->N, i);
-    const float u = RTCHitN_u(args->hit, args->N, i);
-    const float v = RTCHitN_v(args->hit, args->N, i);
-    if (geometry->alpha(triangle, u, v) < geometry->alphaCutoff) args->valid[i] = 0;
+    const uint32_t triangle = RTCHitN_primID(args->hit, n, i);
+    const float u = RTCHitN_u(args->hit, n, i);
+    const float v = RTCHitN_v(args->hit, n, i);
+    if (geometry->alphaTested && geometry->alpha(triangle, u, v) < geometry->alphaCutoff) {
+      args->valid[i] = 0;
+      continue;
+    }
+    if (!geometry->transmissive || context->atGlass == AtGlass::Stop) continue;
+    const scenes::Transmission t = geometry->transmissionAt(triangle, u, v);
+    // Embree puts the candidate's distance in the ray's tfar while a filter runs.
+    const Crossing at{RTCHitN_geomID(args->hit, n, i), RTCRayN_tfar(args->ray, n, i)};
+    bool passes = false;
+    if (context->atGlass == AtGlass::Chance) {
+      const glm::vec3 origin(RTCRayN_org_x(args->ray, n, i), RTCRayN_org_y(args->ray, n, i),
+                             RTCRayN_org_z(args->ray, n, i));
+      const glm::vec3 direction(RTCRayN_dir_x(args->ray, n, i), RTCRayN_dir_y(args->ray, n, i),
+                                RTCRayN_dir_z(args->ray, n, i));
+      passes = fateOf(chance(origin, direction, at), t) == Fate::Pass;
+      float& passed = context->passedAt[RTCRayN_id(args->ray, n, i)];
+      if (passes) passed = std::min(passed, at.t);
+    } else if (context->atGlass == AtGlass::Open) {
+      passes = t.grey() > 0.0f;
+    } else {
+      Layers& layers = context->layers[RTCRayN_id(args->ray, n, i)];
+      passes = layers.add(at, context->grey ? glm::vec3(t.grey()) : t.rgb());
+    }
+    if (passes) args->valid[i] = 0;
   }
 }
 
@@ -181,10 +319,41 @@ struct RayTracer::Impl {
 
   Status addGeometry(uint32_t instanceIndex, uint32_t primitiveIndex);
 
-  Hit toHit(const Ray& ray, const RTCRayHit& rh) const {
+  // Whether a material is glass, once per material (a BLEND material's texture is searched
+  // for an alpha below 1): -1 unknown, else 0 or 1.
+  std::vector<int8_t> transmissiveMaterial;
+  void setTransmission(Geometry& g, int material) {
+    const size_t slot = size_t(material + 1);  // -1: glTF's default material
+    if (transmissiveMaterial.size() <= slot) transmissiveMaterial.resize(slot + 1, -1);
+    const bool blend = !options.blendAsMask;
+    if (transmissiveMaterial[slot] < 0)
+      transmissiveMaterial[slot] = scenes::transmissive(*scene, material, blend) ? 1 : 0;
+    if (!transmissiveMaterial[slot]) return;
+    const scenes::Material& m = scene->material(material);
+    g.transmissive = true;
+    g.blend = blend;
+    g.scene = scene;
+    g.material = material;
+    g.transmissionTextured = m.baseColorTexture.valid() || m.transmissionTexture.valid();
+    g.transmission = scenes::transmission(*scene, material, glm::vec2(0.0f), blend);
+  }
+
+  // `chance`: the query let rays through glass by their own chance (AtGlass::Chance), so a
+  // ray that ended in glass was stopped or absorbed, as the filter decided alike; `passedAt`:
+  // the nearest glass it passed (Context::passedAt).
+  Hit toHit(const Ray& ray, const RTCRayHit& rh, bool chance, float passedAt) const {
     Hit hit;
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+      hit.throughGlass = chance && passedAt < std::numeric_limits<float>::infinity();
+      return hit;
+    }
+    hit.throughGlass = chance && passedAt < rh.ray.tfar;
     const Geometry& g = geometries[rh.hit.geomID];
+    if (chance && g.transmissive)
+      hit.absorbed = fateOf(trace::chance(glm::vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z),
+                                          glm::vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z),
+                                          Crossing{rh.hit.geomID, rh.ray.tfar}),
+                            g.transmissionAt(rh.hit.primID, rh.hit.u, rh.hit.v)) == Fate::Absorb;
     hit.t = rh.ray.tfar;
     hit.instance = g.instance;
     hit.primitive = g.primitive;
@@ -272,6 +441,7 @@ Status RayTracer::Impl::addGeometry(uint32_t instanceIndex, uint32_t primitiveIn
   rtcSetGeometryMask(geom, kMaskVisible | (inst.castShadows ? kMaskShadowCasters : 0u));
 
   const scenes::Material& material = scene->material(prim.material);
+  setTransmission(g, prim.material);
   const bool cutOut = options.alphaTest &&
                       (material.alphaMode == scenes::AlphaMode::Mask ||
                        (material.alphaMode == scenes::AlphaMode::Blend && options.blendAsMask));
@@ -295,12 +465,13 @@ Status RayTracer::Impl::addGeometry(uint32_t instanceIndex, uint32_t primitiveIn
 
   const uint32_t id = uint32_t(geometries.size());
   geometries.push_back(g);
-  if (geometries.back().alphaTested) {
+  if (g.alphaTested || g.transmissive) {
     // geometries is reserved up front, so this pointer stays valid.
     rtcSetGeometryUserData(geom, &geometries.back());
-    rtcSetGeometryIntersectFilterFunction(geom, alphaFilter);
-    rtcSetGeometryOccludedFilterFunction(geom, alphaFilter);
-    ++stats.alphaTestedGeometries;
+    rtcSetGeometryIntersectFilterFunction(geom, surfaceFilter);
+    rtcSetGeometryOccludedFilterFunction(geom, surfaceFilter);
+    if (g.alphaTested) ++stats.alphaTestedGeometries;
+    if (g.transmissive) ++stats.transmissiveGeometries;
   }
   rtcCommitGeometry(geom);
   rtcAttachGeometryByID(rtcScene, geom, id);
@@ -367,28 +538,53 @@ Result<std::unique_ptr<RayTracer>> RayTracer::build(const scenes::Scene& scene,
 RayTracer::RayTracer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 RayTracer::~RayTracer() = default;
 
-Hit RayTracer::intersect(const Ray& ray) const {
+Hit RayTracer::intersect(const Ray& ray, Glass glass) const {
   impl_->count(1, Query::Intersect);
   if (!traceable(ray)) return Hit{};
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+  Context context(atGlass(glass, Query::Intersect));
+  float passedAt = std::numeric_limits<float>::infinity();
+  context.passedAt = &passedAt;
   RTCRayHit rh;
-  toEmbree(ray, rh);
-  rtcIntersect1(impl_->rtcScene, &context, &rh);
-  return impl_->toHit(ray, rh);
+  toEmbree(ray, rh);  // id 0: passedAt
+  rtcIntersect1(impl_->rtcScene, &context.embree, &rh);
+  return impl_->toHit(ray, rh, context.atGlass == AtGlass::Chance, passedAt);
 }
 
-bool RayTracer::occluded(const Ray& ray) const {
+bool RayTracer::occluded(const Ray& ray, Glass glass) const {
   impl_->count(1, Query::Occluded);
   if (!traceable(ray)) return false;
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
+  Context context(atGlass(glass, Query::Occluded));
   RTCRay r;
   toEmbree(ray, r);
-  rtcOccluded1(impl_->rtcScene, &context, &r);
+  rtcOccluded1(impl_->rtcScene, &context.embree, &r);
   // Embree marks an occluded ray by setting tfar to -inf.
   return r.tfar < 0.0f;
 }
+
+glm::vec3 RayTracer::transmittance(const Ray& ray) const {
+  impl_->count(1, Query::Occluded);
+  if (!traceable(ray)) return glm::vec3(1.0f);
+  Layers layers;
+  Context context(AtGlass::Transmittance);
+  context.layers = &layers;
+  RTCRay r;
+  toEmbree(ray, r);  // id 0: layers[0]
+  rtcOccluded1(impl_->rtcScene, &context.embree, &r);
+  return r.tfar < 0.0f ? glm::vec3(0.0f) : layers.value;
+}
+
+scenes::Transmission RayTracer::transmission(const Hit& hit) const {
+  if (!hit.valid()) return {};
+  const Geometry& g = impl_->geometries[hit.geometry];
+  if (!g.transmissive) return {};
+  return g.transmissionAt(hit.triangle, hit.barycentric.x, hit.barycentric.y);
+}
+
+bool RayTracer::transmissive(const Hit& hit) const {
+  return hit.valid() && impl_->geometries[hit.geometry].transmissive;
+}
+
+bool RayTracer::hasGlass() const { return impl_->stats.transmissiveGeometries > 0; }
 
 namespace {
 
@@ -452,42 +648,56 @@ struct OctantStream {
 
 }  // namespace
 
-void RayTracer::intersect(const Ray* rays, Hit* hits, size_t count) const {
+void RayTracer::intersect(const Ray* rays, Hit* hits, size_t count, Glass glass) const {
   impl_->count(count, Query::Intersect);
   thread_local OctantStream stream;
   const uint32_t traced = stream.fill(rays, hits, count);
   if (traced == 0) return;
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  rtcIntersect1M(impl_->rtcScene, &context, stream.rays.data(), traced, sizeof(RTCRayHit));
+  Context context(atGlass(glass, Query::Intersect), RTC_INTERSECT_CONTEXT_FLAG_COHERENT);
+  const bool chance = context.atGlass == AtGlass::Chance;
+  thread_local std::vector<float> passedAt;
+  if (chance && hasGlass()) {
+    passedAt.assign(traced, std::numeric_limits<float>::infinity());
+    for (uint32_t k = 0; k < traced; ++k) stream.rays[k].ray.id = k;
+    context.passedAt = passedAt.data();
+  }
+  rtcIntersect1M(impl_->rtcScene, &context.embree, stream.rays.data(), traced,
+                 sizeof(RTCRayHit));
+  const float never = std::numeric_limits<float>::infinity();
   for (uint32_t k = 0; k < traced; ++k) {
     const uint32_t i = stream.order[k];
-    hits[i] = impl_->toHit(rays[i], stream.rays[k]);
+    hits[i] = impl_->toHit(rays[i], stream.rays[k], chance,
+                           context.passedAt ? passedAt[k] : never);
   }
 }
 
-void RayTracer::occluded(const Ray* rays, bool* blocked, size_t count) const {
-  impl_->count(count, Query::Occluded);
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  // Packets of 16 consecutive rays: a receiver's shadow rays toward one light share an origin
-  // and nearly a direction, and sight lines between neighbouring texels are short and close
-  // together, the coherent cases Embree's packet traversal is made for. On the Cornell box
-  // that is two to three times the rays per second of rtcOccluded1 on the same rays; sorting
-  // them by octant first, or a coherent stream as for intersect, is slower.
+namespace {
+
+// Traces rays as occlusion queries in packets of 16 consecutive rays and calls
+// seen(i, lane, blocked) for each: a receiver's shadow rays toward one light share an origin
+// and nearly a direction, and sight lines between neighbouring texels are short and close
+// together, the coherent cases Embree's packet traversal is made for. On the Cornell box that
+// is two to three times the rays per second of rtcOccluded1 on the same rays; sorting them by
+// octant first, or a coherent stream as for intersect, is slower. Rays Embree must not see
+// are not traced (blocked false). Each ray's id is its lane, for the filters' per-ray state.
+template <class Begin, class Seen>
+void occludedPackets(RTCScene scene, Context& context, const Ray* rays, size_t count,
+                     Begin&& beginPacket, Seen&& seen) {
   constexpr size_t kPacket = 16;
   alignas(64) RTCRay16 packet;
   alignas(64) int valid[kPacket];
   for (size_t base = 0; base < count; base += kPacket) {
     const size_t n = std::min(kPacket, count - base);
+    beginPacket();
     if (n == 1) {  // a lone ray: the single-ray call skips the packet's setup
-      blocked[base] = false;
-      if (!traceable(rays[base])) continue;
+      if (!traceable(rays[base])) {
+        seen(base, 0, false);
+        continue;
+      }
       RTCRay r;
       toEmbree(rays[base], r);
-      rtcOccluded1(impl_->rtcScene, &context, &r);
-      blocked[base] = r.tfar < 0.0f;
+      rtcOccluded1(scene, &context.embree, &r);
+      seen(base, 0, r.tfar < 0.0f);
       continue;
     }
     for (size_t i = 0; i < kPacket; ++i) {
@@ -506,12 +716,39 @@ void RayTracer::occluded(const Ray* rays, bool* blocked, size_t count) const {
       packet.time[i] = 0.0f;
       packet.tfar[i] = valid[i] ? one.tfar : -1.0f;
       packet.mask[i] = one.mask;
-      packet.id[i] = 0;
+      packet.id[i] = unsigned(i);
       packet.flags[i] = 0;
     }
-    rtcOccluded16(valid, impl_->rtcScene, &context, &packet);
-    for (size_t i = 0; i < n; ++i) blocked[base + i] = valid[i] && packet.tfar[i] < 0.0f;
+    rtcOccluded16(valid, scene, &context.embree, &packet);
+    for (size_t i = 0; i < n; ++i) seen(base + i, i, valid[i] && packet.tfar[i] < 0.0f);
   }
+}
+
+}  // namespace
+
+void RayTracer::occluded(const Ray* rays, bool* blocked, size_t count, Glass glass) const {
+  impl_->count(count, Query::Occluded);
+  Context context(atGlass(glass, Query::Occluded));
+  occludedPackets(impl_->rtcScene, context, rays, count, [] {},
+                  [&](size_t i, size_t, bool b) { blocked[i] = b; });
+}
+
+void RayTracer::greyTransmittance(const Ray* rays, float* out, size_t count) const {
+  impl_->count(count, Query::Occluded);
+  Layers layers[16];
+  Context context(AtGlass::Transmittance);
+  context.grey = true;
+  context.layers = layers;
+  // Without glass no filter touches the layers: a ray gets through whole or not at all.
+  const bool glass = hasGlass();
+  occludedPackets(impl_->rtcScene, context, rays, count,
+                  [&] {
+                    if (glass)
+                      for (Layers& l : layers) l.clear();
+                  },
+                  [&](size_t i, size_t lane, bool b) {
+                    out[i] = b ? 0.0f : glass ? layers[lane].value.x : 1.0f;
+                  });
 }
 
 uint64_t RayTracer::raysTraced() const {

@@ -27,15 +27,10 @@ enum class Stream : uint64_t {
   ReferenceView = 6,
   BackDistance = 7,
   Probes = 8,
+  GlassSky = 9,
 };
 
-// SplitMix64's finaliser: a cheap, well-mixed 64-bit hash.
-inline uint64_t mix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
+using afterglow::mix64;  // core/math.h
 
 // Counter-based generator: seeded from (stream, item, sample), then a SplitMix64 sequence.
 class Rng {

@@ -19,10 +19,25 @@
 //   decides (a back-face hit on single-sided geometry marks a sample invalid).
 // - alphaMode MASK materials get intersection and occlusion filters that sample base-colour
 //   alpha (TEXCOORD per the TextureRef, KHR_texture_transform applied) × baseColorFactor.a and
-//   let rays through below alphaCutoff. alphaMode BLEND is opaque by default: a lightmapper
-//   cannot transmit a fraction of a ray without stochastic alpha, and treating glass or
-//   decals as solid keeps bakes deterministic; RayTracerOptions::blendAsMask cuts them out at
-//   their alphaCutoff instead (for foliage wrongly authored as BLEND).
+//   let rays through below alphaCutoff, for every query.
+// - Glass: alphaMode BLEND and KHR_materials_transmission let light through, a fraction `open`
+//   tinted by the base colour (scenes::transmission in material_eval.h: 1 − alpha for BLEND,
+//   the transmission for KHR_materials_transmission); the rest meets the surface, which
+//   reflects it with its bounce albedo. What a query does with such a surface is the caller's
+//   choice (Glass): geometry questions (where a texel's sample may sit, whether a wall
+//   separates two texels, where probes may go, what a camera sees) take it as solid, as
+//   before; light takes it as glass. Light-carrying rays cannot split, so an intersect with
+//   Glass::Light lets each ray through at random with the surface's grey transmittance
+//   (Transmission::grey, the precompute's scalar transport), stops it with probability
+//   1 − open (the surface reflects), and absorbs the rest (Hit::absorbed: the tint took it).
+//   The random number is a hash of the ray's origin and direction and the triangle, so a ray
+//   meets the same fate whichever thread traces it, as often as it is traced. Shadow rays need
+//   no chance: transmittance() and greyTransmittance() multiply the transmittance of every
+//   transmissive surface along the segment (0 at an opaque one), and an occluded() with
+//   Glass::Light blocks only where no light gets through. Only transmissive geometries get
+//   filters, so a scene without glass traces exactly as fast, and the same rays, as before.
+//   RayTracerOptions::blendAsMask cuts BLEND out at its alphaCutoff instead (for foliage
+//   wrongly authored as BLEND).
 // - Ray masks: every geometry carries kMaskVisible; shadow-casting instances also carry
 //   kMaskShadowCasters. Shadow and visibility rays use kMaskShadowCasters so instances with
 //   castShadows = false are skipped; camera and gather rays use the default mask (all bits).
@@ -40,6 +55,7 @@
 #include <glm/glm.hpp>
 
 #include "afterglow/core/status.h"
+#include "afterglow/scenes/material_eval.h"
 #include "afterglow/scenes/scene.h"
 
 namespace afterglow::trace {
@@ -61,6 +77,13 @@ struct Ray {
   uint32_t mask = kMaskAll;  // hits geometry whose mask shares a bit with this
 };
 
+// How a query treats transmissive surfaces (glass; see the header comment).
+enum class Glass : uint8_t {
+  Solid,  // they stop rays like any other surface (geometry questions)
+  Light,  // as light meets them: intersect passes, stops or absorbs each ray by its own chance;
+          // occluded blocks only where no light gets through
+};
+
 struct Hit {
   float t = std::numeric_limits<float>::infinity();  // ray parameter of the hit
   uint32_t instance = kInvalidId;   // index into Scene::instances
@@ -73,6 +96,12 @@ struct Hit {
   // clockwise when the instance transform mirrors, as glTF defines).
   glm::vec3 geometricNormal{0.0f};
   bool frontFace = false;  // the ray arrived on the side geometricNormal points to
+  // Glass::Light intersect: the ray ended in a transmissive surface's tint (it carries no light
+  // from here, and sees no sky); false for a ray the surface stopped, which sees the surface.
+  bool absorbed = false;
+  // Glass::Light intersect: the ray passed glass before its hit (or, for a miss, on its way
+  // out to the sky).
+  bool throughGlass = false;
 
   bool valid() const { return instance != kInvalidId; }
 };
@@ -82,7 +111,8 @@ struct RayTracerOptions {
                                  // Sponza ~25% slower intersect, occluded about the same
   bool highQualityBuild = true;  // RTC_BUILD_QUALITY_HIGH (SAH with spatial splits) vs MEDIUM
   bool alphaTest = true;         // cut out alphaMode MASK materials (false: all opaque)
-  bool blendAsMask = false;      // also cut out alphaMode BLEND materials at their alphaCutoff
+  bool blendAsMask = false;      // cut out alphaMode BLEND materials at their alphaCutoff
+                                 // instead of letting light through them as glass
 };
 
 // What build() did with the scene, for report.json and warnings.
@@ -90,6 +120,7 @@ struct RayTracerStats {
   size_t geometries = 0;          // Embree geometries (one per instance × primitive)
   size_t triangles = 0;           // world-space triangles handed to Embree
   size_t alphaTestedGeometries = 0;
+  size_t transmissiveGeometries = 0;  // glass: BLEND or KHR_materials_transmission
   size_t invalidTriangles = 0;    // out-of-range indices or non-finite vertices, made degenerate
   size_t skippedInstances = 0;    // instances with no valid mesh
   double buildSeconds = 0.0;
@@ -110,16 +141,30 @@ class RayTracer {
   RayTracer& operator=(const RayTracer&) = delete;
 
   // Closest hit; an invalid Hit on a miss.
-  Hit intersect(const Ray& ray) const;
-  // true when anything (after alpha cut-outs and masks) lies within [tnear, tfar].
-  bool occluded(const Ray& ray) const;
+  Hit intersect(const Ray& ray, Glass glass = Glass::Solid) const;
+  // true when anything (after alpha cut-outs and masks) lies within [tnear, tfar]; with
+  // Glass::Light, anything that lets no light through.
+  bool occluded(const Ray& ray, Glass glass = Glass::Solid) const;
   // Batched forms: same results as the single-ray calls, and faster: Embree traces them
   // together (see raytracer.cpp). Intersect batches go as coherent streams sorted by direction
   // octant, best with rays from a few neighbouring points (hundreds to a few thousand);
   // occluded batches go as packets of 16 consecutive rays, best when neighbours in the batch
   // share an origin and nearly a direction (one receiver's shadow rays toward one light).
-  void intersect(const Ray* rays, Hit* hits, size_t count) const;
-  void occluded(const Ray* rays, bool* blocked, size_t count) const;
+  void intersect(const Ray* rays, Hit* hits, size_t count, Glass glass = Glass::Solid) const;
+  void occluded(const Ray* rays, bool* blocked, size_t count, Glass glass = Glass::Solid) const;
+  // The light that gets through the segment [tnear, tfar]: the product of the transmissive
+  // surfaces' Transmission::rgb() along it, 0 at anything opaque (1 where nothing lies). A
+  // segment through more than 16 transmissive triangles counts as blocked.
+  glm::vec3 transmittance(const Ray& ray) const;
+  // The same per ray with each surface's Transmission::grey() (the precompute's scalar light),
+  // traced as occluded() traces a batch; without glass in the scene exactly !occluded().
+  void greyTransmittance(const Ray* rays, float* out, size_t count) const;
+  // What the surface of a valid hit lets through there (nothing for an opaque one).
+  scenes::Transmission transmission(const Hit& hit) const;
+  // Whether a valid hit's geometry is transmissive anywhere (its material is glass).
+  bool transmissive(const Hit& hit) const;
+  // Whether any geometry is transmissive (stats().transmissiveGeometries > 0).
+  bool hasGlass() const;
 
   enum class Query { Intersect, Occluded };
   // Rays traced so far by all threads (intersect and occluded, or one kind), including
