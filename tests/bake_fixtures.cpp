@@ -1,5 +1,6 @@
 #include "bake_fixtures.h"
 
+#include <cstdio>
 #include <fstream>
 
 #include <gtest/gtest.h>
@@ -7,6 +8,7 @@
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
 #include "afterglow/bakefiles/pipeline.h"
+#include "afterglow/trace/raytracer.h"
 #include "test_util.h"
 
 namespace afterglow::baker {
@@ -39,6 +41,20 @@ BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options) {
   Result<BakeResult> r = bake(scene, options);
   EXPECT_TRUE(r) << r.message();
   return r ? std::move(r.value()) : BakeResult{};
+}
+
+ReferenceTexels referenceOrDie(const scenes::Scene& scene, const TexelSet& texels,
+                               const Environment& environment, int samples,
+                               const std::vector<uint32_t>& subset) {
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
+  EXPECT_TRUE(tracer) << tracer.message();
+  if (!tracer) return {};
+  ReferenceOptions options;
+  options.samples = samples;
+  Result<ReferenceTexels> ref =
+      referenceTexels(scene, *tracer.value(), texels, environment, options, subset);
+  EXPECT_TRUE(ref) << ref.message();
+  return ref ? std::move(ref.value()) : ReferenceTexels{};
 }
 
 scenes::Light hardSun(glm::vec3 direction) {
@@ -157,6 +173,15 @@ scenes::Scene cornellForAccuracy(const std::string& path) {
   if (atlases == 0) return {};
   EXPECT_EQ(atlases, 1u);
   return scene;
+}
+
+void printComparison(const std::string& what, const ReferenceComparison& c) {
+  std::printf("%s, %zu texels: total RMSE %.2f%% bias %+.2f%% (direct %.2f%% %+.2f%%, indirect "
+              "%.2f%% %+.2f%%; reference noise %.2f%%)\n",
+              what.c_str(), c.texels, 100.0 * c.total.relativeRmse, 100.0 * c.total.bias,
+              100.0 * c.direct.relativeRmse, 100.0 * c.direct.bias,
+              100.0 * c.indirect.relativeRmse, 100.0 * c.indirect.bias,
+              100.0 * c.total.referenceNoise);
 }
 
 }  // namespace afterglow::baker

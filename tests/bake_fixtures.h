@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "afterglow/baker/bake.h"
+#include "afterglow/baker/reference.h"
 #include "afterglow/scenes/scene.h"
 
 namespace afterglow::baker {
@@ -20,6 +21,11 @@ void unwrapAt(scenes::Scene& scene, float texelsPerUnit);
 size_t unwrapIntoAtlas(scenes::Scene& scene, int atlasSize);
 // The bake's result, or an empty one and a test failure.
 BakeResult bakeOrDie(const scenes::Scene& scene, const BakeOptions& options);
+// The reference path tracer's light at `subset` of the texels, `samples` paths each under
+// `environment`, or an empty one and a test failure.
+ReferenceTexels referenceOrDie(const scenes::Scene& scene, const TexelSet& texels,
+                               const Environment& environment, int samples,
+                               const std::vector<uint32_t>& subset);
 // A horizontal square of side 2 × halfSize at y = 0, facing +Y, of one material (a dielectric,
 // metallic 0: glTF's default is a metal) with this base colour and specularFactor.
 scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColor,
@@ -47,5 +53,8 @@ scenes::Scene furnaceLevel(const std::string& name, float baseColor, const nlohm
 // cavity's light is checked by its power balance (baker_emission_test.cpp) and against Cycles
 // (README). A test failure (and an empty scene) when loading or unwrapping fails.
 scenes::Scene cornellForAccuracy(const std::string& path);
+// Prints one line of a comparison with the reference: what was compared, the total's relative
+// RMSE and bias, direct's and indirect's, and the reference's own noise.
+void printComparison(const std::string& what, const ReferenceComparison& c);
 
 }  // namespace afterglow::baker

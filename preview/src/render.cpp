@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/runtime/solver.h"
@@ -47,6 +48,28 @@ glm::vec3 bakedRadiance(const scenes::Scene& scene, const trace::RayTracer& trac
                                brdf.f0, brdf.roughness, lightmapped ? &light : nullptr);
 }
 
+// Glass in the picture as an engine blends it: a transmissive surface shows (1 − open) of
+// itself as baked over open × tint of what lies behind it (scenes::transmission), layer after
+// layer, up to kLayers of them. No noise: the light behind a window is its own primary ray.
+// Probe spheres are drawn in front of the first surface only.
+glm::vec3 blendedRadiance(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                          const std::vector<bakefiles::LightmapImage>& lightmaps,
+                          trace::Ray ray, const trace::Hit& first,
+                          const runtime::ReflectionLighting* reflections) {
+  constexpr int kLayers = 8;
+  glm::vec3 sum(0.0f), weight(1.0f);
+  trace::Hit hit = first;
+  for (int layer = 0;; ++layer) {
+    const scenes::Transmission t = tracer.transmission(hit);
+    sum += weight * (1.0f - t.open) *
+           bakedRadiance(scene, tracer, lightmaps, ray, hit, reflections);
+    if (!(t.open > 0.0f) || layer + 1 == kLayers) return sum;
+    weight *= t.rgb();
+    ray.tnear = std::nextafter(hit.t, std::numeric_limits<float>::infinity());
+    hit = tracer.intersect(ray);
+  }
+}
+
 }  // namespace
 
 Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const trace::RayTracer& tracer,
@@ -75,7 +98,7 @@ Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const tra
         if (!sphereIndex.empty() && sphereIndex.shade(ray, px, py, hit.t, &sphere))
           sum += sphere;
         else
-          sum += bakedRadiance(scene, tracer, lightmaps, ray, hit, lighting);
+          sum += blendedRadiance(scene, tracer, lightmaps, ray, hit, lighting);
       }
     return sum / float(spa * spa);
   });

@@ -31,21 +31,26 @@ struct Receiver {
   glm::vec3 geometricNormal;
 };
 
-bool visible(const trace::RayTracer& tracer, const Receiver& r, glm::vec3 dir, float tfar) {
-  if (glm::dot(dir, r.geometricNormal) <= 0.0f) return false;  // behind the surface
+// The share of light that reaches the receiver along dir: 0 below its surface or behind
+// anything opaque, what the glass in between lets through (its grey transmittance), else 1.
+float through(const trace::RayTracer& tracer, const Receiver& r, glm::vec3 dir, float tfar) {
+  if (glm::dot(dir, r.geometricNormal) <= 0.0f) return 0.0f;  // behind the surface
   trace::Ray ray;
   ray.origin = r.position;
   ray.direction = dir;
   ray.tfar = tfar;
   ray.mask = trace::kMaskShadowCasters;
-  return !tracer.occluded(ray);
+  float out;
+  tracer.greyTransmittance(&ray, &out, 1);
+  return out;
 }
 
 // A receiver's shadow rays toward one source, queued and traced together: they share an origin
 // and nearly a direction, so Embree's packet traversal runs them about twice as fast as one by
-// one (RayTracer::occluded over an array). Each queued sample carries a weight; samples whose
-// direction points below the surface are queued untraced and count as blocked, as visible()
-// would have it. One per block of receivers: its arrays are too big to set up per receiver.
+// one (RayTracer::greyTransmittance over an array). Each queued sample carries a weight;
+// samples whose direction points below the surface are queued untraced and get nothing
+// through, as through() would have it. One per block of receivers: its arrays are too big to
+// set up per receiver.
 class ShadowRays {
  public:
   static constexpr int kBatch = 32;  // a multiple of the tracer's packet width
@@ -69,26 +74,41 @@ class ShadowRays {
   }
   bool full() const { return size_ == kBatch; }
 
-  // Traces the queued rays and calls seen(weight, visible) per sample in the order queued.
+  // Traces the queued rays and calls seen(weight, through) per sample in the order queued,
+  // `through` the share of the light that gets through (0 or 1 without glass).
   template <class Seen>
   void flush(const trace::RayTracer& tracer, Seen&& seen) {
-    tracer.occluded(rays_, blocked_, size_t(traced_));
-    for (int i = 0, k = 0; i < size_; ++i)
-      seen(weight_[i], below_[i] ? false : !blocked_[k++]);
+    tracer.greyTransmittance(rays_, through_, size_t(traced_));
+    for (int i = 0, k = 0; i < size_; ++i) seen(weight_[i], below_[i] ? 0.0f : through_[k++]);
     size_ = traced_ = 0;
   }
 
  private:
   const Receiver* receiver_ = nullptr;
   trace::Ray rays_[kBatch];
-  bool blocked_[kBatch];
+  float through_[kBatch];
   double weight_[kBatch];
   bool below_[kBatch];
   int size_ = 0, traced_ = 0;
 };
 
-// One shadow estimate at a receiver: E/π for a source of unit strength, and what the rays saw.
+// What a pass's shadow rays saw: none got the light through, all got it whole, or else
+// (Partial: also where glass let part of it through, so the edges of a window's light get
+// refined as an opaque shadow's are).
 enum class Shade : uint8_t { Dark, Lit, Partial };
+struct ShadeCount {
+  int rays = 0, whole = 0, none = 0;
+  void add(float through) {
+    ++rays;
+    whole += through == 1.0f ? 1 : 0;
+    none += through == 0.0f ? 1 : 0;
+  }
+  Shade shade() const {
+    return none == rays ? Shade::Dark : whole == rays ? Shade::Lit : Shade::Partial;
+  }
+};
+
+// One shadow estimate at a receiver: E/π for a source of unit strength, and what the rays saw.
 struct Shadowed {
   float transfer = 0.0f;
   Shade shade = Shade::Dark;  // Dark: no light or every ray blocked; Lit: none blocked
@@ -106,9 +126,13 @@ Shadowed punctualPass(const trace::RayTracer& tracer, const scenes::Light& light
   if (!(view.transfer > 0.0f)) return out;
   if (!view.hasExtent) rays = 1;
   const uint64_t seedBase = uint64_t(lightIndex) << 32;
-  int seen = 0;
+  float seen = 0.0f;  // sums of 0 and 1 are exact: without glass, the count of rays through
+  ShadeCount shade;
   batch.begin(r);
-  auto count = [&](double, bool visible) { seen += visible ? 1 : 0; };
+  auto count = [&](double, float through) {
+    seen += through;
+    shade.add(through);
+  };
   const sampling::Stratified strata{uint32_t(rays)};
   const sampling::Rng::ItemSeed seed{
       sampling::Rng::itemSeed(sampling::Stream::LightVisibility, item)};
@@ -122,8 +146,8 @@ Shadowed punctualPass(const trace::RayTracer& tracer, const scenes::Light& light
     if (batch.full()) batch.flush(tracer, count);
   }
   batch.flush(tracer, count);
-  out.transfer = view.transfer * float(seen) / float(rays);
-  out.shade = seen == 0 ? Shade::Dark : seen == rays ? Shade::Lit : Shade::Partial;
+  out.transfer = view.transfer * seen / float(rays);
+  out.shade = shade.shade();
   out.refinable = view.hasExtent;
   return out;
 }
@@ -147,16 +171,12 @@ Shadowed closedFormEmissivePass(const trace::RayTracer& tracer, const Emitter& e
   if (!(unoccluded > 0.0)) return out;
   const uint64_t seedBase = uint64_t(e.material) << 32;
   double weightSum = 0.0, visibleSum = 0.0;
-  int seen = 0, blocked = 0;
+  ShadeCount shade;
   batch.begin(r);
-  auto count = [&](double weight, bool visible) {
+  auto count = [&](double weight, float through) {
     weightSum += weight;
-    if (visible) {
-      visibleSum += weight;
-      ++seen;
-    } else {
-      ++blocked;
-    }
+    if (through > 0.0f) visibleSum += weight * double(through);
+    shade.add(through);
   };
   const sampling::Stratified strata{uint32_t(samples)};
   const sampling::Rng::ItemSeed seed{sampling::Rng::itemSeed(sampling::Stream::Emissive, item)};
@@ -181,7 +201,7 @@ Shadowed closedFormEmissivePass(const trace::RayTracer& tracer, const Emitter& e
   // No sample landed on the visible part (a sliver above the horizon): too small to matter.
   if (!(weightSum > 0.0)) return out;
   out.transfer = float(unoccluded * visibleSum / weightSum);
-  out.shade = seen == 0 ? Shade::Dark : blocked == 0 ? Shade::Lit : Shade::Partial;
+  out.shade = shade.shade();
   return out;
 }
 
@@ -218,8 +238,9 @@ float sampledEmissiveTransfer(const scenes::Scene& scene, const trace::RayTracer
     if (cosEmit <= 0.0f) continue;
     const float mod = emissionModulation(scene, m, q.uv);
     if (mod <= 0.0f) continue;
-    if (!visible(tracer, r, dir, dist * (1.0f - kShadowShorten))) continue;
-    const double g = double(mod) * double(cosTheta) / double(kPi);
+    const float share = through(tracer, r, dir, dist * (1.0f - kShadowShorten));
+    if (share == 0.0f) continue;
+    const double g = double(share) * double(mod) * double(cosTheta) / double(kPi);
     sum += g / (nA * areaPdf(dist, cosEmit) + nB * double(cosTheta) / double(kPi));
   }
   if (cosineSamples > 0) {
@@ -234,8 +255,10 @@ float sampledEmissiveTransfer(const scenes::Scene& scene, const trace::RayTracer
       ray.origin = r.position;
       ray.direction = dir;
       ray.mask = trace::kMaskShadowCasters;
-      const trace::Hit hit = tracer.intersect(ray);
-      if (!hit.valid() || primitiveMaterial(scene, hit) != int(e.material)) continue;
+      // Through glass by the ray's own chance, as the gather's rays go.
+      const trace::Hit hit = tracer.intersect(ray, trace::Glass::Light);
+      if (!hit.valid() || hit.absorbed || primitiveMaterial(scene, hit) != int(e.material))
+        continue;
       if (!hit.frontFace && !e.doubleSided) continue;
       const float cosEmit = std::abs(glm::dot(hit.geometricNormal, dir));
       if (cosEmit <= 0.0f) continue;
@@ -413,7 +436,7 @@ Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
     std::vector<trace::Ray> rays;
     std::vector<float> transfer;  // per ray: its point's unshadowed transfer
     std::vector<uint32_t> lightOf;
-    std::unique_ptr<bool[]> blocked(new bool[16 * lightCount]);
+    std::unique_ptr<float[]> through(new float[16 * lightCount]);
     const sampling::Stratified one{1};
     for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
       if (!texels.valid[t]) continue;
@@ -444,10 +467,10 @@ Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
           lightOf.push_back(uint32_t(k));
         }
       }
-      tracer.occluded(rays.data(), blocked.get(), rays.size());
+      tracer.greyTransmittance(rays.data(), through.get(), rays.size());
       std::vector<double> sum(lightCount, 0.0);
       for (size_t j = 0; j < rays.size(); ++j)
-        if (!blocked[j]) sum[lightOf[j]] += double(transfer[j]);
+        if (through[j] > 0.0f) sum[lightOf[j]] += double(transfer[j]) * double(through[j]);
       for (size_t k = 0; k < lightCount; ++k) footprint[k][t] = float(sum[k] / double(n));
     }
     progress.advance(end - begin);

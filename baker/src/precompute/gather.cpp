@@ -17,6 +17,7 @@
 #include "afterglow/baker/stages.h"
 #include "afterglow/core/parallel.h"
 #include "precompute/gather_batch.h"
+#include "precompute/glass_sky.h"
 #include "precompute/light_visibility.h"
 #include "precompute/sight_lines.h"
 #include "precompute/texel_lookup.h"
@@ -38,10 +39,18 @@ struct GatherInputs {
   const TexelSet& texels;
   const LinkOptions& options;
   Progress& progress;
+  const GlassSky* glassSky;  // the sky through glass, estimated apart; null: by the rays
   // The albedo at close hits on textured surfaces (TexelGather::hitAlbedo), within
   // albedoReach(t) of texel t.
   bool albedoDetail() const { return options.albedoDetail > 0.0f; }
   float albedoReach(uint32_t t) const { return options.albedoDetail * texels.edge[t]; }
+  uint32_t glassSamples() const { return uint32_t(std::max(0, options.glassSkySamples)); }
+  // How texel t's rays through glass weigh against its points on glass (GlassSky): as its
+  // `rays` first-pass rays, whichever of its passes cast them (any fixed count keeps the
+  // weights a split of each direction, and the first pass's is the count most texels keep).
+  GatherBatch::GlassWeights glassWeights(uint32_t t, uint32_t rays) const {
+    return {texels.normal[t], rays, glassSamples()};
+  }
 };
 
 // Lists items by key: key k's items are items[start[k] .. start[k + 1]), in index order; an
@@ -216,6 +225,7 @@ void castInBatches(const GatherInputs& in, const TexelLookup* lookup, Progress* 
   constexpr size_t kRaysPerBatch = 1024, kTexelsPerBlock = 512;
   parallelForBlocks(in.texels.size(), [&](size_t begin, size_t end, int) {
     GatherBatch batch;
+    batch.setGlassSky(in.glassSky);
     std::vector<Queued> queued;
     for (size_t t = begin; t < end && !(progress && progress->cancelled());) {
       batch.clear();
@@ -302,8 +312,9 @@ bool castFirstPass(const GatherInputs& in, const RaySets& sets, const TexelLooku
       [&](GatherBatch& batch, const std::vector<Queued>& queued) {
         for (const auto& [t, firstRay] : queued) {
           const uint32_t n = sets.firstCount(t);
-          const GatherBatch::Summary sum =
-              batch.summarize(in.tracer, firstRay, firstRay + n, texels.edge[t]);
+          const GatherBatch::GlassWeights glass = in.glassWeights(t, n);
+          const GatherBatch::Summary sum = batch.summarize(in.tracer, firstRay, firstRay + n,
+                                                           texels.edge[t], &glass);
           if (isBuried(in, t, sum, n)) {
             first.buried[t] = 1;
             continue;
@@ -443,11 +454,39 @@ bool castSecondPass(const GatherInputs& in, const RaySets& sets, const TexelLook
       [&](GatherBatch& batch, const std::vector<Queued>& queued) {
         for (const auto& [t, firstRay] : queued) {
           const uint32_t n = second.hits.count(t);
-          const GatherBatch::Summary sum = batch.summarize(in.tracer, firstRay, firstRay + n);
+          const GatherBatch::GlassWeights glass = in.glassWeights(t, sets.firstCount(t));
+          const GatherBatch::Summary sum =
+              batch.summarize(in.tracer, firstRay, firstRay + n, 0.0f, &glass);
           second.hits.take(in, batch, t, firstRay);
           sums[t].add(sum.sky, sum.inverseDistance, n);
         }
       });
+  in.progress.end();
+  return !in.progress.cancelled();
+}
+
+// The glass samples' share of the sky each texel sees through glass (GlassSky), added to its
+// rays' sky as each of its rays would have brought it (the rays brought the rest). False when
+// cancelled.
+constexpr double kY00 = 0.28209479177387814;  // the SH basis's constant term
+
+bool addGlassSky(const GatherInputs& in, const RaySets& sets, std::vector<TexelRays>& sums) {
+  const TexelSet& texels = in.texels;
+  in.progress.begin(stageStep(Stage::Gather, "sky through glass"), texels.size());
+  parallelForBlocks(texels.size(), [&](size_t begin, size_t end, int) {
+    for (size_t t = begin; t < end && !in.progress.cancelled(); ++t) {
+      if (sums[t].count == 0) continue;
+      double sky[kShCount] = {};
+      // The sky its rays saw, as a share of a white sky's: the open sky, and the rays' share
+      // of the sky through glass.
+      const float open = float(sums[t].sky[0] / (double(sums[t].count) * kY00));
+      in.glassSky->addTo(in.tracer, texels.position[t], texels.normal[t],
+                         texels.geometricNormal[t], t, in.glassSamples(),
+                         sets.firstCount(uint32_t(t)), open, sky);
+      for (int i = 0; i < kShCount; ++i) sums[t].sky[i] += double(sums[t].count) * sky[i];
+    }
+    in.progress.advance(end - begin);
+  }, 256);
   in.progress.end();
   return !in.progress.cancelled();
 }
@@ -616,7 +655,10 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const trace::RayTra
   if (count > TexelGather::kTexelMask)
     return Status::error(format("gatherTexels: %u texels is more than a bake can index", count));
   const uint32_t rays = uint32_t(options.texelRays);
-  const GatherInputs in{scene, tracer, texels, options, progress};
+  GlassSky glass;
+  if (options.glassSkySamples > 0 && tracer.hasGlass()) glass = GlassSky(scene);
+  const GatherInputs in{scene, tracer, texels, options, progress,
+                        glass.empty() ? nullptr : &glass};
   const Groups groups = formBlocks(texels);
   const RaySets sets(texels, groups, rays);
   // The lights each texel's sample sees, for the close hits' check (TexelOfHit's light match).
@@ -634,6 +676,7 @@ Result<TexelGather> gatherTexels(const scenes::Scene& scene, const trace::RayTra
   dropLeaversFirstRays(groups, roles, sums);
   SecondPass second = planSecondPass(in, groups, sets, roles, first.buried, rays);
   if (!castSecondPass(in, sets, settled, roles, second, sums)) return Status::error("cancelled");
+  if (in.glassSky && !addGlassSky(in, sets, sums)) return Status::error("cancelled");
 
   TexelGather g;
   g.raysPerTexel = rays;

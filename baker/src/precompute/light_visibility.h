@@ -10,7 +10,8 @@
 //
 // One hard shadow ray toward each light's centre (a directional light's direction, a point or
 // spot light's position; outside a spot's outer cone, past a light's range, or behind the
-// surface counts as unreached); the first 31 lights. Emissive surfaces are not in the set.
+// surface counts as unreached); the first 31 lights. Emissive surfaces are not in the set. A
+// light reaches a point through glass (trace::Glass::Light): some of it gets there.
 //
 // Per texel also whether its footprint is lit evenly (kUneven when one of four points of it
 // is reached by other lights than its sample): a front cluster reflects its texels' light
@@ -85,7 +86,7 @@ class LightVisibility {
           }
       }
       std::unique_ptr<bool[]> blocked(new bool[rays.size() + 1]);
-      tracer.occluded(rays.data(), blocked.get(), rays.size());
+      tracer.occluded(rays.data(), blocked.get(), rays.size(), trace::Glass::Light);
       for (size_t k = 0; k < rays.size(); ++k)
         if (!blocked[k]) bits[queries[k].texel * 5 + queries[k].point] |= 1u << queries[k].light;
       for (size_t t = begin; t < end; ++t) {

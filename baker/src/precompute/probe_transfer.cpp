@@ -46,13 +46,13 @@ struct ProbeResult {
 };
 
 // A probe's shadow rays toward its sources, traced together: per ray its source and the weight
-// its SH projection takes when unblocked.
+// its SH projection takes when unblocked (times what glass lets through).
 struct ShadowBatch {
   std::vector<trace::Ray> rays;
   std::vector<size_t> source;
   std::vector<double> weight;
-  std::unique_ptr<bool[]> blocked;
-  size_t capacity = 0;  // of blocked
+  std::unique_ptr<float[]> through;
+  size_t capacity = 0;  // of through
 
   void clear() {
     rays.clear();
@@ -135,7 +135,7 @@ class ProbeTracer {
         const trace::Hit& hit = batch.hits()[base + r * stride];
         if (!hit.valid()) continue;
         ++hits;
-        if (anyEmitter_) emissionAlongRay(hit, r, res);
+        if (anyEmitter_ && !hit.absorbed) emissionAlongRay(hit, r, res);
         // Bounced light: the hit's cluster, or the far cluster standing in for it from here.
         const uint32_t code = batch.codes()[base + r * stride];
         if (code == TexelGather::kNoHit) continue;
@@ -166,15 +166,17 @@ class ProbeTracer {
       res.rows.appendRow(targets.data(), weights.data(), unique);
     }
     // The sky the hits block: summed over the hits, or over the misses taken from the whole
-    // sphere's sum, whichever are fewer.
+    // sphere's sum, whichever are fewer. Through glass a ray blocks what the glass does not
+    // let through (GatherBatch::skyShare).
     const bool overHits = hits <= dirs_.rays / 2;
     if (overHits) std::fill(res.blocked, res.blocked + runtime::kProbeSkyCount, 0.0);
     else std::copy(dirs_.allProducts, dirs_.allProducts + runtime::kProbeSkyCount, res.blocked);
-    const double sign = overHits ? 1.0 : -1.0;
     for (uint32_t r = 0; r < dirs_.rays; ++r) {
-      if (batch.hits()[base + r * stride].valid() != overHits) continue;
+      const double share = double(batch.skyShare(base + r * stride));
+      const double weight = overHits ? 1.0 - share : -share;
+      if (weight == 0.0) continue;
       const float* pk = &dirs_.products[size_t(r) * runtime::kProbeSkyCount];
-      for (int k = 0; k < runtime::kProbeSkyCount; ++k) res.blocked[k] += sign * double(pk[k]);
+      for (int k = 0; k < runtime::kProbeSkyCount; ++k) res.blocked[k] += weight * double(pk[k]);
     }
   }
 
@@ -190,15 +192,16 @@ class ProbeTracer {
     if (batch.rays.empty()) return;
     if (batch.capacity < batch.rays.size()) {
       batch.capacity = batch.rays.size();
-      batch.blocked.reset(new bool[batch.capacity]);
+      batch.through.reset(new float[batch.capacity]);
     }
-    tracer_.occluded(batch.rays.data(), batch.blocked.get(), batch.rays.size());
+    tracer_.greyTransmittance(batch.rays.data(), batch.through.get(), batch.rays.size());
     for (size_t k = 0; k < batch.rays.size(); ++k) {
-      if (batch.blocked[k]) continue;
+      if (!(batch.through[k] > 0.0f)) continue;
       float y[kShCount];
       runtime::shBasis(batch.rays[k].direction, y);
       double* sh = &res.source[batch.source[k] * kShCount];
-      for (int i = 0; i < kShCount; ++i) sh[i] += batch.weight[k] * double(y[i]);
+      const double weight = batch.weight[k] * double(batch.through[k]);
+      for (int i = 0; i < kShCount; ++i) sh[i] += weight * double(y[i]);
     }
   }
 

@@ -50,8 +50,9 @@ ReflectionHit recordHit(const scenes::Scene& scene, const trace::RayTracer& trac
   const scenes::Material& mat = scene.material(material);
   h.material = transportMaterial(scene, material, transport);
   h.distance = hit.t;
-  // The back of a single-sided surface is black, as in the baked render: everything stays 0.
-  if (!hit.frontFace && !mat.doubleSided) return h;
+  // The back of a single-sided surface is black, as in the baked render, and so is a ray the
+  // tint of glass absorbed: everything stays 0.
+  if ((!hit.frontFace && !mat.doubleSided) || hit.absorbed) return h;
   const glm::vec2 uv0 = tracer.uv(hit, 0);
   const scenes::SurfaceBrdf brdf = surfaceBrdf(scene, material, uv0);
   const int atlas = inst.lightmap.atlas;
@@ -163,7 +164,9 @@ Status captureReflectionProbes(const scenes::Scene& scene, const trace::RayTrace
     constexpr size_t kBatch = 4096;
     parallelFor((texels + kBatch - 1) / kBatch, [&](size_t b) {
       const size_t begin = b * kBatch, n = std::min(kBatch, texels - begin);
-      tracer.intersect(rays.data() + begin, hits.data() + begin, n);
+      // Through glass by each ray's own chance, as the gather's rays: a texel of the cube
+      // shows the glass or what lies beyond it, in the glass's proportions over many texels.
+      tracer.intersect(rays.data() + begin, hits.data() + begin, n, trace::Glass::Light);
     }, 1);
     if (progress.cancelled()) return Status::error("cancelled");
     std::vector<ReflectionHit> records(texels);

@@ -1,8 +1,13 @@
 // The reference integrator behind reference.h: unidirectional path tracing with next-event
 // estimation for punctual lights and emissive triangles (multiple importance sampling with the
-// cosine-sampled continuation), Russian roulette from the third bounce.
+// cosine-sampled continuation), Russian roulette from the third bounce. Glass in colour: a path
+// passes a transmissive surface with probability open, its throughput times the tint per
+// channel, or stops there and reflects (the precompute carries the grey of it), and shadow
+// rays take the RGB product of the glass they cross (trace::RayTracer::transmittance).
 #pragma once
 
+#include <cmath>
+#include <limits>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -31,7 +36,9 @@ class PathTracer {
 
   // Radiance toward the camera along a primary ray, as `afterglow render` shades a bake:
   // emission (where Material::emitsFrom says) plus diffuse albedo × one path's E/π at the first
-  // hit. Misses, back faces of single-sided geometry and dynamic instances are black.
+  // hit that stops the ray (glass lets it through by chance, tinted: throughGlass; glass shows
+  // its emission where it stops the ray, as the baked render blends it). Misses, back faces of
+  // single-sided geometry and dynamic instances are black.
   glm::vec3 cameraRadiance(const trace::Ray& ray, glm::vec2 u, sampling::Rng& rng) const;
 
   // Radiance along a ray as a reflection probe's capture shades it (reflection_capture.h), with
@@ -40,6 +47,7 @@ class PathTracer {
   // 0, one sampled specular reflection's radiance (this again, one level shallower; the sky on
   // a miss). The BRDF (GGX, Smith height-correlated, Schlick) is sampled by its distribution of
   // normals, written here apart from the runtime's prefilter so the two check each other.
+  // Glass as for cameraRadiance.
   glm::vec3 probeRadiance(const trace::Ray& ray, int specularDepth, sampling::Rng& rng) const;
 
  private:
@@ -50,6 +58,25 @@ class PathTracer {
   // Solid-angle pdf with which nextEvent picks the emissive point of `hit` seen from distance t.
   float emitterPdf(const trace::Hit& hit, glm::vec3 direction) const;
   float offset(glm::vec3 p) const;
+  // Follows `ray` through glass: met(hit) sees every surface it meets, the glass it passes
+  // included (whose emission lights as any surface's does: the precompute's direct light
+  // counts it whole); at a transmissive one the path passes with probability open,
+  // `throughput` times the tint, else it stops there. Returns where it stopped (invalid: it
+  // escaped). A pass is no bounce: the ray keeps its origin, so hit.t is the distance from it
+  // (the emitters' MIS pdf needs that).
+  template <class Met>
+  trace::Hit throughGlass(trace::Ray ray, glm::vec3& throughput, sampling::Rng& rng,
+                          Met&& met) const {
+    for (;;) {
+      const trace::Hit hit = tracer_.intersect(ray);
+      if (!hit.valid()) return hit;
+      met(hit);
+      const scenes::Transmission t = tracer_.transmission(hit);
+      if (!(t.open > 0.0f) || rng.next() >= t.open) return hit;
+      throughput *= t.tint;
+      ray.tnear = std::nextafter(hit.t, std::numeric_limits<float>::infinity());
+    }
+  }
 
   const scenes::Scene& scene_;
   const trace::RayTracer& tracer_;

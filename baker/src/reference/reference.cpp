@@ -70,14 +70,15 @@ float PathTracer::emitterPdf(const trace::Hit& hit, glm::vec3 direction) const {
 glm::vec3 PathTracer::nextEvent(glm::vec3 p, glm::vec3 n, glm::vec3 ng, bool bounced,
                                 sampling::Rng& rng) const {
   glm::vec3 sum(0.0f);
+  // What gets through to the light, per channel (glass tints it).
   auto unblocked = [&](glm::vec3 dir, float length) {
-    if (glm::dot(dir, ng) <= 0.0f) return false;
+    if (glm::dot(dir, ng) <= 0.0f) return glm::vec3(0.0f);
     trace::Ray ray;
     ray.origin = p;
     ray.direction = dir;
     ray.tfar = length;
     ray.mask = trace::kMaskShadowCasters;
-    return !tracer_.occluded(ray);
+    return tracer_.transmittance(ray);
   };
   for (const scenes::Light& light : scene_.lights) {
     const LightView view = viewLight(light, p, n);
@@ -85,9 +86,10 @@ glm::vec3 PathTracer::nextEvent(glm::vec3 p, glm::vec3 n, glm::vec3 ng, bool bou
     glm::vec3 dir;
     float length;
     lightShadowRay(light, view, p, rng.next2(), &dir, &length);
-    if (!unblocked(dir, length)) continue;
+    const glm::vec3 through = unblocked(dir, length);
+    if (through == glm::vec3(0.0f)) continue;
     const float scale = light.intensity * (bounced ? light.bounceIntensity : 1.0f);
-    sum += light.color * scale * view.transfer;
+    sum += through * (light.color * scale * view.transfer);
   }
   if (emitters_.empty() || !(emitterCdf_.back() > 0.0f)) return sum;
   // One emissive point, the emitter chosen by power, weighted against the cosine-sampled
@@ -107,12 +109,13 @@ glm::vec3 PathTracer::nextEvent(glm::vec3 p, glm::vec3 n, glm::vec3 ng, bool bou
   float cosEmit = -glm::dot(q.normal, dir);
   if (e.doubleSided) cosEmit = std::abs(cosEmit);
   if (cosTheta <= 0.0f || cosEmit <= 0.0f) return sum;
-  if (!unblocked(dir, dist * (1.0f - kShadowShorten))) return sum;
+  const glm::vec3 through = unblocked(dir, dist * (1.0f - kShadowShorten));
+  if (through == glm::vec3(0.0f)) return sum;
   const glm::vec3 le = emittedRadiance(scene_, int(e.material), q.uv);
   const float pdfLight = emitterPick_[k] * q.pdfArea * dist2 / cosEmit;  // solid angle
   const float pdfCosine = cosTheta / kPi;
   // E/π = (1/π) ∫ Le cosθ dω; the estimator Le cosθ / (π pdfLight) times the MIS weight.
-  sum += le * (cosTheta / kPi) / (pdfLight + pdfCosine);
+  sum += through * (le * (cosTheta / kPi) / (pdfLight + pdfCosine));
   return sum;
 }
 
@@ -134,7 +137,17 @@ PathTracer::Estimate PathTracer::irradiance(glm::vec3 p, glm::vec3 n, glm::vec3 
     trace::Ray ray;
     ray.origin = p;
     ray.direction = dir;
-    const trace::Hit hit = tracer_.intersect(ray);
+    // Emission, of whatever the ray meets (MIS-weighted against nextEvent's emitter samples).
+    auto emission = [&](const trace::Hit& met) {
+      if (!scene_.instances[met.instance].isStatic) return;
+      const int m = hitMaterial(scene_, met);
+      const scenes::Material& mat = scene_.material(m);
+      if (!mat.emissive() || !mat.emitsFrom(met.frontFace)) return;
+      const float pdfLight = emitterPdf(met, dir);
+      const float weight = pdfCosine > 0.0f ? pdfCosine / (pdfCosine + pdfLight) : 1.0f;
+      bucket += throughput * emittedRadiance(scene_, m, tracer_.uv(met, 0)) * weight;
+    };
+    const trace::Hit hit = throughGlass(ray, throughput, rng, emission);
     if (!hit.valid()) {
       bucket += throughput * skyRadiance(env_.skySh, dir);
       break;
@@ -145,11 +158,6 @@ PathTracer::Estimate PathTracer::irradiance(glm::vec3 p, glm::vec3 n, glm::vec3 
     if (!inst.isStatic) break;                       // dynamic: blocks, takes no part
     if (!hit.frontFace && !mat.doubleSided) break;   // inside a wall
     const glm::vec2 uv0 = tracer_.uv(hit, 0);
-    if (mat.emissive() && mat.emitsFrom(hit.frontFace)) {
-      const float pdfLight = emitterPdf(hit, dir);
-      const float weight = pdfCosine > 0.0f ? pdfCosine / (pdfCosine + pdfLight) : 1.0f;
-      bucket += throughput * emittedRadiance(scene_, material, uv0) * weight;
-    }
     if (depth + 1 >= maxDepth_) break;
     throughput *= runtime::boostAlbedo(diffuseAlbedo(scene_, material, uv0), env_.albedoBoost);
     if (depth >= 2) {
@@ -170,15 +178,17 @@ PathTracer::Estimate PathTracer::irradiance(glm::vec3 p, glm::vec3 n, glm::vec3 
 }
 
 glm::vec3 PathTracer::cameraRadiance(const trace::Ray& ray, glm::vec2 u, sampling::Rng& rng) const {
-  const trace::Hit hit = tracer_.intersect(ray);
+  glm::vec3 throughput(1.0f);
+  const trace::Hit hit = throughGlass(ray, throughput, rng, [](const trace::Hit&) {});
   if (!hit.valid()) return glm::vec3(0.0f);
   const scenes::Instance& inst = scene_.instances[hit.instance];
   const int material = hitMaterial(scene_, hit);
   const scenes::Material& mat = scene_.material(material);
   if (!hit.frontFace && !mat.doubleSided) return glm::vec3(0.0f);
   const glm::vec2 uv0 = tracer_.uv(hit, 0);
-  glm::vec3 radiance =
-      mat.emitsFrom(hit.frontFace) ? emittedRadiance(scene_, material, uv0) : glm::vec3(0.0f);
+  const glm::vec3 radiance =
+      throughput * (mat.emitsFrom(hit.frontFace) ? emittedRadiance(scene_, material, uv0)
+                                                 : glm::vec3(0.0f));
   if (!inst.isStatic || inst.lightmap.atlas < 0) return radiance;
   const float side = hit.frontFace ? 1.0f : -1.0f;
   const glm::vec3 ng = hit.geometricNormal * side;
@@ -187,19 +197,22 @@ glm::vec3 PathTracer::cameraRadiance(const trace::Ray& ray, glm::vec2 u, samplin
   glm::vec3 p = tracer_.position(hit);
   p += ng * offset(p);
   const Estimate e = irradiance(p, n, ng, u, rng);
-  return radiance + diffuseAlbedo(scene_, material, uv0) * (e.direct + e.indirect);
+  return radiance + throughput * diffuseAlbedo(scene_, material, uv0) * (e.direct + e.indirect);
 }
 
 glm::vec3 PathTracer::probeRadiance(const trace::Ray& ray, int specularDepth, sampling::Rng& rng) const {
-  const trace::Hit hit = tracer_.intersect(ray);
-  if (!hit.valid()) return glm::max(skyRadiance(env_.skySh, ray.direction), glm::vec3(0.0f));
+  glm::vec3 throughput(1.0f);
+  const trace::Hit hit = throughGlass(ray, throughput, rng, [](const trace::Hit&) {});
+  if (!hit.valid())
+    return throughput * glm::max(skyRadiance(env_.skySh, ray.direction), glm::vec3(0.0f));
   const scenes::Instance& inst = scene_.instances[hit.instance];
   const int material = hitMaterial(scene_, hit);
   const scenes::Material& mat = scene_.material(material);
   if (!hit.frontFace && !mat.doubleSided) return glm::vec3(0.0f);
   const glm::vec2 uv0 = tracer_.uv(hit, 0);
   glm::vec3 radiance =
-      mat.emitsFrom(hit.frontFace) ? emittedRadiance(scene_, material, uv0) : glm::vec3(0.0f);
+      throughput * (mat.emitsFrom(hit.frontFace) ? emittedRadiance(scene_, material, uv0)
+                                                 : glm::vec3(0.0f));
   const scenes::SurfaceBrdf brdf = surfaceBrdf(scene_, material, uv0);
   const float side = hit.frontFace ? 1.0f : -1.0f;
   const glm::vec3 ng = hit.geometricNormal * side;
@@ -209,7 +222,7 @@ glm::vec3 PathTracer::probeRadiance(const trace::Ray& ray, int specularDepth, sa
   p += ng * offset(p);
   if (inst.isStatic && inst.lightmap.atlas >= 0) {
     const Estimate e = irradiance(p, n, ng, rng.next2(), rng);
-    radiance += brdf.diffuse * (e.direct + e.indirect);
+    radiance += throughput * brdf.diffuse * (e.direct + e.indirect);
   }
   if (specularDepth <= 0 || brdf.f0 == glm::vec3(0.0f)) return radiance;
   const glm::vec3 v = -ray.direction;
@@ -236,7 +249,7 @@ glm::vec3 PathTracer::probeRadiance(const trace::Ray& ray, int specularDepth, sa
   trace::Ray next;
   next.origin = p;
   next.direction = l;
-  return radiance + fresnel * (4.0f * vis * nDotL * vDotH / cosH) *
+  return radiance + throughput * fresnel * (4.0f * vis * nDotL * vDotH / cosH) *
                         probeRadiance(next, specularDepth - 1, rng);
 }
 

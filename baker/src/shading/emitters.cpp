@@ -7,12 +7,37 @@
 
 namespace afterglow::baker {
 
+void addTriangles(const scenes::Instance& inst, const scenes::Primitive& prim,
+                  const std::vector<glm::vec2>& uvs, Emitter& e) {
+  const bool mirrored = glm::determinant(glm::mat3(inst.transform)) < 0.0f;
+  scenes::forEachWorldTriangle(inst, prim, [&](size_t k, glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    const uint32_t i0 = prim.indices[3 * k], i1 = prim.indices[3 * k + 1],
+                   i2 = prim.indices[3 * k + 2];
+    const glm::vec3 cr = glm::cross(b - a, c - a);
+    const float area = 0.5f * glm::length(cr);
+    if (!(area > 0.0f) || !std::isfinite(area)) return;
+    EmitterTriangle tri;
+    tri.p0 = a;
+    tri.e1 = b - a;
+    tri.e2 = c - a;
+    tri.normal = (mirrored ? -cr : cr) / (2.0f * area);
+    tri.area = area;
+    const bool hasUv = uvs.size() == prim.positions.size();
+    tri.uv0 = hasUv ? uvs[i0] : glm::vec2(0.0f);
+    tri.uv1 = hasUv ? uvs[i1] : glm::vec2(0.0f);
+    tri.uv2 = hasUv ? uvs[i2] : glm::vec2(0.0f);
+    tri.triangle = uint32_t(k);
+    e.triangles.push_back(tri);
+    e.totalArea += area;
+    e.cdf.push_back(e.totalArea);
+  });
+}
+
 std::vector<Emitter> collectEmitters(const scenes::Scene& scene) {
   std::vector<Emitter> emitters;
   std::vector<int> emitterOfMaterial(scene.materials.size(), -1);
   for (const scenes::Instance& inst : scene.instances) {
     if (inst.mesh < 0 || size_t(inst.mesh) >= scene.meshes.size()) continue;
-    const bool mirrored = glm::determinant(glm::mat3(inst.transform)) < 0.0f;
     for (const scenes::Primitive& prim : scene.meshes[size_t(inst.mesh)].primitives) {
       if (prim.material < 0 || size_t(prim.material) >= scene.materials.size()) continue;
       const scenes::Material& m = scene.materials[size_t(prim.material)];
@@ -27,29 +52,8 @@ std::vector<Emitter> collectEmitters(const scenes::Scene& scene) {
                                    size_t(m.emissiveTexture.texture) < scene.textures.size() &&
                                    scene.textures[size_t(m.emissiveTexture.texture)].loaded();
       }
-      Emitter& e = emitters[size_t(slot)];
-      const std::vector<glm::vec2>& uvs = m.emissiveTexture.texCoord == 1 ? prim.uv1 : prim.uv0;
-      scenes::forEachWorldTriangle(inst, prim, [&](size_t k, glm::vec3 a, glm::vec3 b,
-                                                   glm::vec3 c) {
-        const uint32_t i0 = prim.indices[3 * k], i1 = prim.indices[3 * k + 1],
-                       i2 = prim.indices[3 * k + 2];
-        const glm::vec3 cr = glm::cross(b - a, c - a);
-        const float area = 0.5f * glm::length(cr);
-        if (!(area > 0.0f) || !std::isfinite(area)) return;
-        EmitterTriangle tri;
-        tri.p0 = a;
-        tri.e1 = b - a;
-        tri.e2 = c - a;
-        tri.normal = (mirrored ? -cr : cr) / (2.0f * area);
-        tri.area = area;
-        const bool hasUv = uvs.size() == prim.positions.size();
-        tri.uv0 = hasUv ? uvs[i0] : glm::vec2(0.0f);
-        tri.uv1 = hasUv ? uvs[i1] : glm::vec2(0.0f);
-        tri.uv2 = hasUv ? uvs[i2] : glm::vec2(0.0f);
-        e.triangles.push_back(tri);
-        e.totalArea += area;
-        e.cdf.push_back(e.totalArea);
-      });
+      addTriangles(inst, prim, m.emissiveTexture.texCoord == 1 ? prim.uv1 : prim.uv0,
+                   emitters[size_t(slot)]);
     }
   }
   emitters.erase(std::remove_if(emitters.begin(), emitters.end(),

@@ -21,6 +21,7 @@ struct EmitterTriangle {
   glm::vec3 normal;         // unit, front side (glTF winding, flipped for mirroring transforms)
   float area = 0.0f;        // m²
   glm::vec2 uv0, uv1, uv2;  // the emissive texture's UV set at the three corners
+  uint32_t triangle = 0;    // its index in its primitive
 };
 
 // All emissive triangles of one material, over every instance.
@@ -35,6 +36,11 @@ struct Emitter {
 
 // Emitters sorted by material index; materials with no usable triangle are left out.
 std::vector<Emitter> collectEmitters(const scenes::Scene& scene);
+// Appends a primitive's world triangles of positive area, placed by its instance, to e (and
+// its area and CDF), with `uvs` (the primitive's UV set, or empty) at their corners: how
+// emitters, and the glass the sky shines through (glass_sky.h), gather their triangles.
+void addTriangles(const scenes::Instance& inst, const scenes::Primitive& prim,
+                  const std::vector<glm::vec2>& uvs, Emitter& e);
 
 // The emissive texture's modulation at a UV as one scalar: a Source scales by the material's
 // emission() colour, so a coloured texture can only enter as its mean ratio over the lit
@@ -50,6 +56,17 @@ struct EmitterSample {
   glm::vec2 uv;       // emissive texture UV at the point
   float pdfArea = 0;  // 1 / totalArea
 };
+// A point of a triangle, uniform by area for a uniform u in [0,1)² (square to triangle, area
+// preserving: b1 = 1 − √u.x, b2 = u.y·√u.x), with its UV; pdfArea left 0.
+inline EmitterSample pointOnTriangle(const EmitterTriangle& tri, glm::vec2 u) {
+  const float s = std::sqrt(u.x);
+  const float b1 = 1.0f - s, b2 = u.y * s;
+  EmitterSample out;
+  out.point = tri.p0 + b1 * tri.e1 + b2 * tri.e2;
+  out.normal = tri.normal;
+  out.uv = (1.0f - b1 - b2) * tri.uv0 + b1 * tri.uv1 + b2 * tri.uv2;
+  return out;
+}
 // Inline: direct light draws one for every shadow ray.
 inline EmitterSample sampleEmitter(const Emitter& e, glm::vec2 u) {
   const float pick = std::min(u.x, 0.99999994f) * e.totalArea;
@@ -59,13 +76,7 @@ inline EmitterSample sampleEmitter(const Emitter& e, glm::vec2 u) {
   const float lo = k > 0 ? e.cdf[k - 1] : 0.0f;
   // What is left of u.x inside the chosen triangle's slice, back in [0, 1).
   const float ux = std::clamp((pick - lo) / tri.area, 0.0f, 0.99999994f);
-  // Square to triangle (area preserving): b1 = 1 − √ux, b2 = u.y·√ux.
-  const float s = std::sqrt(ux);
-  const float b1 = 1.0f - s, b2 = u.y * s;
-  EmitterSample out;
-  out.point = tri.p0 + b1 * tri.e1 + b2 * tri.e2;
-  out.normal = tri.normal;
-  out.uv = (1.0f - b1 - b2) * tri.uv0 + b1 * tri.uv1 + b2 * tri.uv2;
+  EmitterSample out = pointOnTriangle(tri, {ux, u.y});
   out.pdfArea = 1.0f / e.totalArea;
   return out;
 }

@@ -70,6 +70,8 @@ struct LinkOptions {
   float refineError = 0.1f;    // relative standard error above which a point casts more rays
                                //   (<= 0: no refined gather)
   int refineRays = 64;         // the most rays the refined gather adds to a point
+  int glassSkySamples = 256;   // the most points on glass a texel samples the sky through it at
+                               //   (glass_sky.h; 0: its cosine rays alone see that sky)
 };
 
 // Stage direct (direct.h): unit direct light per light and emissive material.

@@ -4,8 +4,10 @@
 // (no lightmap) get no light. When the bake has reflection probes, surfaces are shaded as an
 // engine shades them instead: the metallic-roughness BRDF's diffuse colour × lightmap +
 // emission + specular from the probes (runtime::ReflectionLighting: blended, box-projected,
-// prefiltered, the DFG table), so metal and gloss show. The output is linear HDR; tone mapping
-// happens on write.
+// prefiltered, the DFG table), so metal and gloss show. Glass (alphaMode BLEND,
+// KHR_materials_transmission) is blended as an engine blends it: (1 − open) of the glass as
+// shaded over open × tint of what lies behind it (scenes::transmission). The output is linear
+// HDR; tone mapping happens on write.
 // `afterglow render --reference` path-traces the same view instead (baker::renderReference),
 // shaded the same way but with the lightmap replaced by a path-traced E/π at each first hit.
 #pragma once
