@@ -90,12 +90,9 @@ int benchAccuracy(int argc, char** argv) {
     else if (arg == "--breakdown") breakdownRays = int(next());
     else if (arg == "--single-sided-emission") singleSidedEmission = true;
     else if (arg == "--reference-cache" && i + 1 < argc) referenceCache = argv[++i];
-    else if (arg == "--quality" && i + 1 < argc) {
-      const std::string q = argv[++i];
-      options = baker::bakePreset(q == "draft" ? baker::Quality::Draft
-                                  : q == "high" ? baker::Quality::High
-                                                : baker::Quality::Default);
-    } else if (arg == "--texel-rays") options.links.texelRays = int(next());
+    else if (arg == "--quality" && i + 1 < argc)
+      options = baker::bakePreset(qualityNamed(argv[++i]));
+    else if (arg == "--texel-rays") options.links.texelRays = int(next());
     else if (arg == "--near-rays") options.links.nearRays = int(next());
     else if (arg == "--near-distance") options.links.nearDistance = float(next());
     else if (arg == "--near-field") options.links.nearField = float(next());
@@ -180,52 +177,15 @@ int benchAccuracy(int argc, char** argv) {
   baker::ReferenceOptions ro;
   ro.samples = spp;
   t0 = Clock::now();
-  Result<baker::ReferenceTexels> ref{baker::ReferenceTexels()};
-  std::string why;
   const std::string cacheKey = scenePath + (singleSidedEmission ? " single-sided emission" : "");
-  baker::ReferenceTexels cached;
-  if (!referenceCache.empty() &&
-      !loadReferenceCache(referenceCache, cacheKey, b.texels, spp, cached, why))
-    std::printf("reference    %s: %s\n", referenceCache.c_str(), why.c_str());
-  // Texel i of `from`, appended to `to`.
-  auto appendTexel = [](baker::ReferenceTexels& to, const baker::ReferenceTexels& from, size_t i) {
-    to.texels.push_back(from.texels[i]);
-    to.direct.push_back(from.direct[i]);
-    to.indirect.push_back(from.indirect[i]);
-    to.directVariance.push_back(from.directVariance[i]);
-    to.indirectVariance.push_back(from.indirectVariance[i]);
-  };
-  std::vector<uint32_t> cachedAt(b.texels.size(), UINT32_MAX), missing;
-  for (size_t i = 0; i < cached.texels.size(); ++i) cachedAt[cached.texels[i]] = uint32_t(i);
-  for (uint32_t t : subset)
-    if (cachedAt[t] == UINT32_MAX) missing.push_back(t);
-  if (!missing.empty()) {
-    Result<baker::ReferenceTexels> fresh =
-        baker::referenceTexels(scene, *tracer.value(), b.texels, baker::Environment(), ro, missing);
-    if (!fresh) return fail(fresh.message());
-    for (size_t i = 0; i < fresh->texels.size(); ++i) {
-      cachedAt[fresh->texels[i]] = uint32_t(cached.texels.size());
-      appendTexel(cached, fresh.value(), i);
-    }
-    if (!referenceCache.empty() &&
-        !saveReferenceCache(referenceCache, cacheKey, b.texels, spp, cached))
-      return fail("accuracy: cannot write the reference cache " + referenceCache);
-  }
-  if (!referenceCache.empty())
-    std::printf("reference    %zu texels read from %s, %zu computed\n",
-                subset.size() - missing.size(), referenceCache.c_str(), missing.size());
-  for (uint32_t t : subset) appendTexel(ref.value(), cached, cachedAt[t]);
+  Result<baker::ReferenceTexels> ref = referenceWithCache(
+      scene, *tracer.value(), b.texels, baker::Environment(), ro, subset, referenceCache, cacheKey);
+  if (!ref) return fail("accuracy: " + ref.message());
   const double refSeconds = secondsSince(t0);
   const baker::ReferenceComparison c =
       baker::compareToReference(ref.value(), b.texelDirect, b.texelIndirect);
   std::printf("reference    %zu texels x %d paths in %.1f s\n", c.texels, spp, refSeconds);
-  auto line = [](const char* name, const baker::ErrorStats& e) {
-    std::printf("%-12s relative RMSE %.4f  bias %+.4f  (reference noise %.4f)\n", name,
-                e.relativeRmse, e.bias, e.referenceNoise);
-  };
-  line("direct", c.direct);
-  line("indirect", c.indirect);
-  line("total", c.total);
+  printErrors(c);
   if (worst > 0) printWorst(b, ref.value(), size_t(worst), worstDirect);
   if (breakdownRays > 0)
     printIndirectBreakdown(scene, *tracer.value(), b, ref.value(), breakdownRays);

@@ -6,6 +6,22 @@ namespace afterglow::bench {
 
 const char* mark(bool ok) { return ok ? "ok" : "MISSED"; }
 
+baker::Quality qualityNamed(const std::string& name) {
+  return name == "draft" ? baker::Quality::Draft
+         : name == "high" ? baker::Quality::High
+                          : baker::Quality::Default;
+}
+
+void printErrors(const baker::ReferenceComparison& c) {
+  auto line = [](const char* name, const baker::ErrorStats& e) {
+    std::printf("%-12s relative RMSE %.4f  bias %+.4f  (reference noise %.4f)\n", name,
+                e.relativeRmse, e.bias, e.referenceNoise);
+  };
+  line("direct", c.direct);
+  line("indirect", c.indirect);
+  line("total", c.total);
+}
+
 Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atlasSize) {
   bakefiles::BakeJob job;
   job.input = scene.sourcePath;

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <string>
 
+#include "afterglow/baker/options.h"
+#include "afterglow/baker/reference.h"
 #include "afterglow/core/status.h"
 #include "afterglow/core/timer.h"
 #include "afterglow/scenes/gltf.h"
@@ -31,6 +33,12 @@ Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atla
 
 const char* mark(bool ok);
 
+// A quality preset by its name on the command line: draft, high, else default.
+baker::Quality qualityNamed(const std::string& name);
+
+// The comparison's direct, indirect and total lines: relative RMSE, bias, reference noise.
+void printErrors(const baker::ReferenceComparison& c);
+
 int benchUv(int argc, char** argv);
 int benchAccuracy(int argc, char** argv);
 int benchBake(int argc, char** argv);
@@ -38,6 +46,7 @@ int benchRuntime(int argc, char** argv);
 int benchViews(int argc, char** argv);
 int benchProbes(int argc, char** argv);
 int benchReflection(int argc, char** argv);
+int benchGlass(int argc, char** argv);
 // bench_reflection_probes.cpp: capture, runtime update and transport share of a bake.
 int reflectionBakeFigures(const std::string& path, float texelsPerUnit, int threads, int repeat,
                           int probeCount, int resolution);

@@ -8,6 +8,7 @@
 //   afterglow_bench probes [SCENE] [--texels-per-unit 4] [--threads 2] [--repeat 5]
 //   afterglow_bench reflection [SCENE] [--texels-per-unit 4] [--threads 2] [--probes 4]
 //       [--resolution 128] [--repeat 10] [--sampled] [--prefilter-only]
+//   afterglow_bench glass [SCENE] [--sky R,G,B] [--spp N] [--stride N] [--opaque-glass] ...
 #include <cstdio>
 #include <cstring>
 
@@ -23,14 +24,18 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "views") == 0) return benchViews(argc, argv);
   if (std::strcmp(command, "probes") == 0) return benchProbes(argc, argv);
   if (std::strcmp(command, "reflection") == 0) return benchReflection(argc, argv);
+  if (std::strcmp(command, "glass") == 0) return benchGlass(argc, argv);
   std::fprintf(stderr,
-               "usage: afterglow_bench uv|bake|runtime|accuracy|views|probes|reflection [options]\n"
+               "usage: afterglow_bench uv|bake|runtime|accuracy|views|probes|reflection|glass "
+               "[options]\n"
                "  uv        lightmap UVs of Sponza: utilisation, stretch, time (issue 2)\n"
                "  bake      bake time, accuracy, ray throughput, memory (issue 3)\n"
                "  runtime   transport size and load, bounce and update times, one thread (issue 4)\n"
                "  accuracy  a bake against the reference path tracer (Cornell box)\n"
                "  views     two linear pictures of one view (afterglow, Cycles) per material\n"
                "  probes    light probes: placement, precompute share, refresh time, bytes (issue 14)\n"
-               "  reflection  reflection probes: prefilter, capture, runtime update, transport share (issue 15)\n");
+               "  reflection  reflection probes: prefilter, capture, runtime update, transport share (issue 15)\n"
+               "  glass     the gas station's shop, lit by the sky through its windows (issue 28)"
+               "\n");
   return 2;
 }

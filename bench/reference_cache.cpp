@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "afterglow/core/atomic_file.h"
+#include "afterglow/trace/raytracer.h"
 
 namespace afterglow::bench {
 
@@ -90,6 +91,55 @@ bool saveReferenceCache(const std::string& path, const std::string& key,
   AtomicOutput output;
   if (!output.write(path, bytes) || !output.commit()) return false;
   return true;
+}
+
+namespace {
+
+// Texel i of `from`, appended to `to`.
+void appendTexel(baker::ReferenceTexels& to, const baker::ReferenceTexels& from, size_t i) {
+  to.texels.push_back(from.texels[i]);
+  to.direct.push_back(from.direct[i]);
+  to.indirect.push_back(from.indirect[i]);
+  to.directVariance.push_back(from.directVariance[i]);
+  to.indirectVariance.push_back(from.indirectVariance[i]);
+}
+
+}  // namespace
+
+Result<baker::ReferenceTexels> referenceWithCache(const scenes::Scene& scene,
+                                                  const trace::RayTracer& tracer,
+                                                  const baker::TexelSet& texels,
+                                                  const baker::Environment& environment,
+                                                  const baker::ReferenceOptions& options,
+                                                  const std::vector<uint32_t>& subset,
+                                                  const std::string& cachePath,
+                                                  const std::string& key) {
+  std::string why;
+  baker::ReferenceTexels cached;
+  if (!cachePath.empty() &&
+      !loadReferenceCache(cachePath, key, texels, options.samples, cached, why))
+    std::printf("reference    %s: %s\n", cachePath.c_str(), why.c_str());
+  std::vector<uint32_t> cachedAt(texels.size(), UINT32_MAX), missing;
+  for (size_t i = 0; i < cached.texels.size(); ++i) cachedAt[cached.texels[i]] = uint32_t(i);
+  for (uint32_t t : subset)
+    if (cachedAt[t] == UINT32_MAX) missing.push_back(t);
+  if (!missing.empty()) {
+    Result<baker::ReferenceTexels> fresh =
+        baker::referenceTexels(scene, tracer, texels, environment, options, missing);
+    if (!fresh) return fresh.status();
+    for (size_t i = 0; i < fresh->texels.size(); ++i) {
+      cachedAt[fresh->texels[i]] = uint32_t(cached.texels.size());
+      appendTexel(cached, fresh.value(), i);
+    }
+    if (!cachePath.empty() && !saveReferenceCache(cachePath, key, texels, options.samples, cached))
+      return Status::error("cannot write the reference cache " + cachePath);
+  }
+  if (!cachePath.empty())
+    std::printf("reference    %zu texels read from %s, %zu computed\n",
+                subset.size() - missing.size(), cachePath.c_str(), missing.size());
+  baker::ReferenceTexels out;
+  for (uint32_t t : subset) appendTexel(out, cached, cachedAt[t]);
+  return out;
 }
 
 }  // namespace afterglow::bench

@@ -25,4 +25,16 @@ bool loadReferenceCache(const std::string& path, const std::string& key,
 bool saveReferenceCache(const std::string& path, const std::string& key,
                         const baker::TexelSet& texels, int spp, const baker::ReferenceTexels& ref);
 
+// The reference for `subset` of the texels, in its order, at options.samples paths: those the
+// cache at `cachePath` holds read from it, the others computed and added to it (no cache when
+// `cachePath` is empty). Prints a line saying what the cache gave.
+Result<baker::ReferenceTexels> referenceWithCache(const scenes::Scene& scene,
+                                                  const trace::RayTracer& tracer,
+                                                  const baker::TexelSet& texels,
+                                                  const baker::Environment& environment,
+                                                  const baker::ReferenceOptions& options,
+                                                  const std::vector<uint32_t>& subset,
+                                                  const std::string& cachePath,
+                                                  const std::string& key);
+
 }  // namespace afterglow::bench
