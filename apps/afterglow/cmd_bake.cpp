@@ -212,8 +212,8 @@ void printSummary(const bakefiles::BakedLevel& level, double writeSeconds,
   std::printf("time         ");
   for (const std::vector<baker::StageTime>* list : {&level.report.extraStages, &r.stages})
     for (const baker::StageTime& s : *list)
-      std::printf(" %s %.2f s,", baker::stageName(s.stage), s.seconds);
-  std::printf(" %s %.2f s\n", baker::stageName(baker::Stage::Write), writeSeconds);
+      std::printf(" %s %.2f s,", stageName(s.stage), s.seconds);
+  std::printf(" %s %.2f s\n", stageName(Stage::Write), writeSeconds);
   std::printf("peak memory   %.2f GB\n", double(peakMemoryBytes()) / 1e9);
   for (const std::string& w : level.report.warnings) std::printf("warning       %s\n", w.c_str());
   for (const std::string& w : r.warnings) std::printf("warning       %s\n", w.c_str());
@@ -331,7 +331,7 @@ int runBake(int argc, char** argv, int first) {
   }
   bakefiles::BakedLevel& level = baked.value();
   level.report.extraStages.insert(level.report.extraStages.begin(),
-                                  {baker::Stage::Load, loadSeconds});
+                                  {Stage::Load, loadSeconds});
 
   AtomicOutput files;
   t0 = Clock::now();

@@ -13,6 +13,7 @@
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/core/stages.h"
 #include "triangle_box.h"
 
 namespace afterglow::probes {
@@ -572,7 +573,7 @@ Result<Placement> placeProbes(const scenes::Scene& scene, const trace::RayTracer
   // The ray tests, one slot per candidate.
   const Prober prober(scene, tracer, options.rays, options.insideFraction);
   std::vector<Outcome> outcomes(candidates.size());
-  progress.begin("probes", candidates.size());
+  progress.begin(stageName(Stage::ProbePlacement), candidates.size());
   parallelForBlocks(candidates.size(), [&](size_t begin, size_t end, int) {
     if (progress.cancelled()) return;
     for (size_t i = begin; i < end; ++i) {

@@ -9,6 +9,7 @@
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/probes/placement.h"
 
 namespace afterglow::probes {
@@ -210,7 +211,7 @@ Result<ReflectionPlacement> placeReflectionProbes(const scenes::Scene& scene,
 
   const RoomMeter meter(scene, tracer, options.rays, options.insideFraction, bounds);
   std::vector<Measure> measures(points.size());
-  progress.begin("reflection probes", points.size());
+  progress.begin(stageStep(Stage::ProbePlacement, "reflection probes"), points.size());
   parallelForBlocks(points.size(), [&](size_t begin, size_t end, int) {
     if (progress.cancelled()) return;
     for (size_t i = begin; i < end; ++i) measures[i] = meter.measure(points[i]);

@@ -21,7 +21,7 @@
 
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/probe_transfer.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "shading/emitters.h"
