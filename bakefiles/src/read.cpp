@@ -230,8 +230,8 @@ const runtime::ProbeTetrahedra& BakedProbes::mesh() const {
 runtime::ShL2 BakedProbes::sample(glm::vec3 p, int* hint) const {
   if (!runtime) {
     // The relit SH file is deringed already, and interpolated as the runtime interpolates.
-    const runtime::ProbeLocation where = runtime::locateProbe(relit.mesh, p, *hint);
-    if (where.tetrahedron >= 0) *hint = where.tetrahedron;
+    const runtime::ProbeLocation where = runtime::locateProbe(relit.mesh, p, hint ? *hint : 0);
+    if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
     return runtime::mixProbes(where, relit.sh);
   }
   const runtime::ShL2 sh = runtime->sampleProbes(p, hint);

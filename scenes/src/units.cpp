@@ -43,8 +43,8 @@ namespace {
 constexpr float kLargestTypicalMetres = 20.0f;
 constexpr double kProportion = 0.25;  // metres
 
-// The largest edge of each static instance's world box over its finite vertices; 0 when it
-// has none.
+// The largest edge of each static instance's world box over its finite vertices (instances
+// without a size left out).
 std::vector<float> staticObjectSizes(const Scene& scene) {
   std::vector<float> sizes;
   for (const Instance& inst : scene.instances) {
