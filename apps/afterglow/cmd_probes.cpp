@@ -71,6 +71,9 @@ const char kProbesHelp[] =
     "                            resolution) to review and edit, and drawn yellow in PROBES.png;\n"
     "                            afterglow bake --probes PROBES.json captures them\n"
     "  --max-reflection-probes N at most this many (default 32), the best fitting first\n"
+    "  --unit-scale X            the level's metres per unit (0.01: centimetres, 0.001:\n"
+    "                            millimetres): scales it first, as afterglow bake --unit-scale\n"
+    "                            does; PROBES.json and --add's probes are in metres (default 1)\n"
     "  --width N, --height N     the picture's size (default 960 x 600)\n"
     "  --threads N               worker threads (default: every core); the output is identical\n"
     "                            for any count\n"
@@ -83,7 +86,9 @@ const char kProbesHelp[] =
     "value) for the six axis normals +X -X +Y -Y +Z -Z, or for each --normal given.\n"
     "OUT/transport.agt is solved as the bake solved it (from scratch, its bounce count from\n"
     "OUT/report.json), so a point on a probe gives that probe's SH in\n"
-    "OUT/probes/light_probes_sh.bin (deringed alike).\n"
+    "OUT/probes/light_probes_sh.bin (deringed alike). A folder afterglow relight wrote has no\n"
+    "transport: its relit probes (probes/light_probes.json and light_probes_sh.bin) are\n"
+    "interpolated as the runtime interpolates them. probes place --bake reads either.\n"
     "\n"
     "Options:\n"
     "  --at x,y,z                a point, metres in the scene's axes; repeatable; required\n"
@@ -121,7 +126,8 @@ std::optional<int> parsePlacement(Args& args, probes::PlacementJob* job, std::st
       !args.getInt("threads", 0, 0, 1024, threads) ||
       !args.getInt("max-reflection-probes", maxReflection, 1, 4096, &maxReflection) ||
       !args.getFloat("refine-threshold", job->refinement.threshold, 0.0f, 1e6f,
-                     &job->refinement.threshold))
+                     &job->refinement.threshold) ||
+      !getUnitScale(args, &job->unitScale))
     return kPlace.usage(args.error());
   job->bake = args.get("bake");
   if (args.has("bake") && job->bake.empty())
@@ -238,7 +244,8 @@ int runPlace(int argc, char** argv, int first) {
           args, argc, argv, first,
           {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"}, {"add"},
            {"bake"}, {"refine-threshold"}, {"width"}, {"height"}, {"threads"},
-           {"reflection", 0, false}, {"max-reflection-probes"}, {"quiet", 0, false},
+           {"reflection", 0, false}, {"max-reflection-probes"}, kUnitScaleOption,
+           {"quiet", 0, false},
            {"help", 'h', false}},
           kPlace))
     return *stop;
@@ -256,6 +263,7 @@ int runPlace(int argc, char** argv, int first) {
   int code = kExitOk;
   Result<scenes::Scene> loaded = loadSceneOrExit(job.input, false, &code);
   if (!loaded) return code;
+  applyUnitScale(loaded.value(), job.unitScale, job.input);
   job.loadSeconds = secondsSince(start);
   // The bake first, so a wrong folder fails before the placement's work.
   std::optional<bakefiles::BakedProbes> baked;

@@ -162,6 +162,7 @@ json bakeSettings(const BakeJob& job, const UnwrapStep& unwrapped, const ProbeSe
           {"clusterTexels", o.clusters.clusterTexels},
           {"dilation", o.dilation},
           {"singleSidedEmission", job.singleSidedEmission},
+          {"unitScale", job.unitScale},
           {"threads", threadCount()},
           {"reference", o.reference},
           {"referenceSpp", o.referenceOptions.samples},

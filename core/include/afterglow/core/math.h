@@ -1,4 +1,5 @@
-// The math basics every library shares, defined once: π and a finiteness test for GLM vectors.
+// The math basics every library shares, defined once: π, a finiteness test for GLM vectors and
+// a linear colour's luminance.
 // Header-only and GLM-only, so the runtime (which links GLM alone) uses it too.
 #pragma once
 
@@ -18,5 +19,8 @@ bool finite(const glm::vec<N, T, Q>& v) {
     if (!std::isfinite(v[i])) return false;
   return true;
 }
+
+// Rec. 709 luminance of a linear RGB colour.
+inline float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
 }  // namespace afterglow
