@@ -156,7 +156,7 @@ int benchAccuracy(int argc, char** argv) {
               double(density.value()), b.texels.size(), valid,
               b.transport.gatherPointCount, b.clusters.size(), b.transport.linkCount());
   std::printf("bake         %.3f s (", bakeSeconds);
-  for (const baker::StageTime& s : b.stages) std::printf(" %s %.3f", baker::stageName(s.stage), s.seconds);
+  for (const baker::StageTime& s : b.stages) std::printf(" %s %.3f", stageName(s.stage), s.seconds);
   std::printf(" )\n");
   std::printf("rays         %.2f M intersect, %.2f M occluded\n", double(b.raysIntersected) / 1e6,
               double(b.raysOccluded) / 1e6);

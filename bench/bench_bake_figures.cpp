@@ -27,10 +27,10 @@ namespace afterglow::bench {
 
 namespace {
 
-double stageSeconds(const baker::BakeResult& r, std::initializer_list<baker::Stage> stages) {
+double stageSeconds(const baker::BakeResult& r, std::initializer_list<Stage> stages) {
   double total = 0.0;
   for (const baker::StageTime& s : r.stages)
-    for (baker::Stage stage : stages)
+    for (Stage stage : stages)
       if (s.stage == stage) total += s.seconds;
   return total;
 }
@@ -86,9 +86,9 @@ void sampleRays(const scenes::Scene& scene, const baker::TexelSet& texels, size_
   }
 }
 
-const std::initializer_list<baker::Stage> kPrecompute = {
-    baker::Stage::Texels, baker::Stage::Gather, baker::Stage::Clusters, baker::Stage::Links,
-    baker::Stage::Direct};
+const std::initializer_list<Stage> kPrecompute = {
+    Stage::Texels, Stage::Gather, Stage::Clusters, Stage::Links,
+    Stage::Direct};
 
 // The precompute's rays per second (texels, gather, clusters, links, direct) against what bare
 // Embree calls take for the same number of rays of each kind. This machine's speed drifts by
@@ -151,7 +151,7 @@ class Throughput {
 // Seconds per stage, and the rays of those that trace any (in millions).
 void printStages(const baker::BakeResult& r) {
   for (const baker::StageTime& s : r.stages) {
-    std::printf(" %s %.3f", baker::stageName(s.stage), s.seconds);
+    std::printf(" %s %.3f", stageName(s.stage), s.seconds);
     if (s.rays > 0) std::printf(" (%.2fM)", double(s.rays) / 1e6);
   }
 }

@@ -72,8 +72,8 @@ int benchProbes(int argc, char** argv) {
   const baker::BakeResult& b = baked.value();
   double probeSeconds = 0.0, gatherRate = 0.0, probeRate = 0.0;
   for (const baker::StageTime& s : b.stages) {
-    if (s.stage == baker::Stage::Probes) probeSeconds = s.seconds, probeRate = double(s.rays) / s.seconds / 1e6;
-    if (s.stage == baker::Stage::Gather) gatherRate = double(s.rays) / s.seconds / 1e6;
+    if (s.stage == Stage::Probes) probeSeconds = s.seconds, probeRate = double(s.rays) / s.seconds / 1e6;
+    if (s.stage == Stage::Gather) gatherRate = double(s.rays) / s.seconds / 1e6;
   }
   const size_t count = placed->positions.size();
   const double placementTotal = tracerSeconds + placeSeconds + tetSeconds;

@@ -49,8 +49,8 @@ int reflectionBakeFigures(const std::string& path, float texelsPerUnit, int thre
   const baker::BakeResult& b = baked.value();
   double captureSeconds = 0.0, passSeconds = 0.0;
   for (const baker::StageTime& s : b.stages) {
-    if (s.stage == baker::Stage::ReflectionCapture) captureSeconds = s.seconds;
-    if (s.stage == baker::Stage::ReflectionPasses) passSeconds = s.seconds;
+    if (s.stage == Stage::ReflectionCapture) captureSeconds = s.seconds;
+    if (s.stage == Stage::ReflectionPasses) passSeconds = s.seconds;
   }
   const runtime::TransportData& data = b.transport;
   const size_t fileBytes = runtime::serializeTransport(data).size();

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "afterglow/core/math.h"
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/preview/render.h"
 #include "bench_common.h"
@@ -23,8 +24,6 @@ namespace {
 bool parse3(const char* s, glm::vec3* v) {
   return std::sscanf(s, "%f,%f,%f", &v->x, &v->y, &v->z) == 3;
 }
-
-float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
 }  // namespace
 

@@ -298,7 +298,7 @@ TEST(CliBake, CtrlCExits130AndWritesNothing) {
                   "256"});
   ASSERT_TRUE(child.started());
   // The ray tracer is built: the bake is under way (its progress names come from stages.h).
-  ASSERT_TRUE(child.waitForStderr(std::string(baker::stageName(baker::Stage::RayTracer)) + ": done"))
+  ASSERT_TRUE(child.waitForStderr(std::string(stageName(Stage::RayTracer)) + ": done"))
       << child.err();
   const int status = child.interruptAndWait();
   ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status) << "\n" << child.err();

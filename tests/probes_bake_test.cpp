@@ -107,6 +107,76 @@ TEST(ProbesBake, ProbeInTheOpenSeesTheConstantSky) {
   EXPECT_LT(worst, 1e-3f);
 }
 
+// A closed room 4 × 3 × 4 m (grey walls facing in, specularFactor 0), or the same with a 1 × 1 m
+// window cut in the middle of its ceiling.
+scenes::Scene roomUnderTheSky(bool window) {
+  scenes::Scene scene = groundQuad("room", 2.0f, 0.5f, 0.0f);  // the floor, y = 0, facing up
+  scenes::Primitive& p = scene.meshes[0].primitives[0];
+  // A quad a b c d, counter-clockwise seen from the room, facing n.
+  auto quad = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 n) {
+    const uint32_t base = uint32_t(p.positions.size());
+    for (glm::vec3 v : {a, b, c, d}) {
+      p.positions.push_back(v);
+      p.normals.push_back(n);
+    }
+    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) p.indices.push_back(base + i);
+  };
+  const float h = 3.0f;
+  quad({-2, 0, -2}, {-2, h, -2}, {-2, h, 2}, {-2, 0, 2}, {1, 0, 0});
+  quad({2, 0, 2}, {2, h, 2}, {2, h, -2}, {2, 0, -2}, {-1, 0, 0});
+  quad({-2, 0, -2}, {2, 0, -2}, {2, h, -2}, {-2, h, -2}, {0, 0, 1});
+  quad({2, 0, 2}, {-2, 0, 2}, {-2, h, 2}, {2, h, 2}, {0, 0, -1});
+  // The ceiling facing down, whole or as four slabs around the window |x|, |z| < 0.5.
+  auto ceiling = [&](float x0, float x1, float z0, float z1) {
+    quad({x0, h, z0}, {x1, h, z0}, {x1, h, z1}, {x0, h, z1}, {0, -1, 0});
+  };
+  if (!window) {
+    ceiling(-2, 2, -2, 2);
+  } else {
+    ceiling(-2, 2, -2, -0.5f);
+    ceiling(-2, 2, 0.5f, 2);
+    ceiling(-2, -0.5f, -0.5f, 0.5f);
+    ceiling(0.5f, 2, -0.5f, 0.5f);
+  }
+  return scene;
+}
+
+// A closed room has no sky: under a sky of radiance 1 and no other light, every probe inside
+// reads E/π below 1e-6 for every normal (its rays all hit the walls; the grid's quadrature error
+// once read as a sky of a few thousandths, some of it negative). Cut a window in the ceiling
+// and the probe half a metre under it sees the sky through it: E/π upwards at least the window's
+// form factor (0.554: four 0.5 × 0.5 m corner rectangles at 0.5 m, the sky's radiance 1), the
+// walls' bounce on top.
+TEST(ProbesBake, AClosedRoomHasNoSkyAndAWindowLetsItIn) {
+  std::vector<glm::vec3> positions;
+  for (glm::vec3 p : gridProbes(1.2f)) positions.push_back(p + glm::vec3(0.0f, 1.5f, 0.0f));
+  positions.emplace_back(0.0f, 2.5f, 0.0f);  // under the window
+  BakeOptions options = draftOptions();
+  options.skyColor = glm::vec3(1.0f);
+  options.probes = meshOf(positions);
+
+  scenes::Scene closed = roomUnderTheSky(false);
+  unwrapAt(closed, 4.0f);
+  const BakeResult dark = bakeOrDie(closed, options);
+  ASSERT_EQ(dark.probeSh.size(), positions.size());
+  float brightest = 0.0f;
+  for (const runtime::ShL2& sh : dark.probeSh)
+    for (const glm::vec3& n : kAxes) {
+      const glm::vec3 e = runtime::irradianceOverPi(sh, n);
+      brightest = std::max({brightest, std::abs(e.r), std::abs(e.g), std::abs(e.b)});
+    }
+  EXPECT_LT(brightest, 1e-6f);
+
+  scenes::Scene open = roomUnderTheSky(true);
+  unwrapAt(open, 4.0f);
+  const BakeResult lit = bakeOrDie(open, options);
+  ASSERT_EQ(lit.probeSh.size(), positions.size());
+  const glm::vec3 up = runtime::irradianceOverPi(lit.probeSh.back(), glm::vec3(0, 1, 0));
+  EXPECT_GT(up.g, 0.554f * 0.95f);
+  std::printf("closed room: brightest probe |E/pi| %.2g; with a window, E/pi up under it %.3f\n",
+              double(brightest), double(up.g));
+}
+
 // One directional light and nothing in its way: a probe's SH is the light's E⊥ times the basis
 // at the direction to the light, so E/π is the clamped cosine's L2 series.
 TEST(ProbesBake, DirectionalLightGivesItsClampedCosine) {

@@ -66,6 +66,12 @@ const char kBakeHelp[] =
     "                           their far-cluster rays into one shared row (default 4; 0: off)\n"
     "  --shared-far-points X    rays a shared far row keeps, in gather points' rays (default 2)\n"
     "  --dilation N             texels each chart is grown into its padding (default 2)\n"
+    "  --unit-scale X           the level's metres per unit (0.01: centimetres, 0.001:\n"
+    "                           millimetres): scales the whole level first, as a root node\n"
+    "                           scale would (lights' positions and ranges, cameras, probe\n"
+    "                           volumes and reflection probes too); the outputs are in metres\n"
+    "                           (default 1; the bake warns when the level looks like it is not\n"
+    "                           in metres)\n"
     "  --single-sided-emission  double-sided emissive materials emit from their front only\n"
     "                           (default: both sides, as glTF says); written on the output's\n"
     "                           materials as extras.afterglow.singleSidedEmission\n"
@@ -103,7 +109,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},       {"single-sided-emission", 0, false},
     {"probes"},            {"probe-spacing"},   {"max-probes"},  {"probe-dering"},
-    {"reflection-bounces"},
+    {"reflection-bounces"}, kUnitScaleOption,
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
 
 // The settings file as `--name=value` arguments, placed before the command line's own so that
@@ -212,8 +218,8 @@ void printSummary(const bakefiles::BakedLevel& level, double writeSeconds,
   std::printf("time         ");
   for (const std::vector<baker::StageTime>* list : {&level.report.extraStages, &r.stages})
     for (const baker::StageTime& s : *list)
-      std::printf(" %s %.2f s,", baker::stageName(s.stage), s.seconds);
-  std::printf(" %s %.2f s\n", baker::stageName(baker::Stage::Write), writeSeconds);
+      std::printf(" %s %.2f s,", stageName(s.stage), s.seconds);
+  std::printf(" %s %.2f s\n", stageName(Stage::Write), writeSeconds);
   std::printf("peak memory   %.2f GB\n", double(peakMemoryBytes()) / 1e9);
   for (const std::string& w : level.report.warnings) std::printf("warning       %s\n", w.c_str());
   for (const std::string& w : r.warnings) std::printf("warning       %s\n", w.c_str());
@@ -291,7 +297,8 @@ int runBake(int argc, char** argv, int first) {
       !args.getFloat("probe-spacing", 0.0f, 0.0f, 1e6f, &job.probeSpacing) ||
       !args.getInt("max-probes", maxProbes, 1, 100000000, &maxProbes) ||
       !args.getFloat("probe-dering", 0.0f, 0.0f, 1e6f, &job.probeDering) ||
-      !args.getInt("reflection-bounces", 1, 0, 64, &reflectionBounces))
+      !args.getInt("reflection-bounces", 1, 0, 64, &reflectionBounces) ||
+      !getUnitScale(args, &job.unitScale))
     return command.usage(args.error());
   options.reflections.bounces = uint32_t(reflectionBounces);
   job.maxProbes = size_t(maxProbes);
@@ -319,6 +326,7 @@ int runBake(int argc, char** argv, int first) {
   const double loadSeconds = secondsSince(t0);
   if (!loaded) return code;
   scenes::Scene& scene = loaded.value();
+  applyUnitScale(scene, job.unitScale, input);
   if (job.singleSidedEmission)
     for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
 
@@ -331,7 +339,7 @@ int runBake(int argc, char** argv, int first) {
   }
   bakefiles::BakedLevel& level = baked.value();
   level.report.extraStages.insert(level.report.extraStages.begin(),
-                                  {baker::Stage::Load, loadSeconds});
+                                  {Stage::Load, loadSeconds});
 
   AtomicOutput files;
   t0 = Clock::now();

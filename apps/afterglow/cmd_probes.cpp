@@ -31,8 +31,9 @@ const char kProbesHelp[] =
     "probes place: places light probes for dynamic objects: a grid over the static geometry (or\n"
     "over the probe volumes authored on glTF nodes as extras.afterglow.probeVolume = {\"size\":\n"
     "[x, y, z], \"spacing\": s}), refined on an octree where it holds or touches geometry, never\n"
-    "inside geometry (a candidate whose rays mostly see the backs of single-sided surfaces is\n"
-    "moved to a free spot in its cell or dropped) and kept a margin off surfaces; then a Delaunay\n"
+    "inside geometry (a candidate whose rays see the backs of single-sided surfaces in over a\n"
+    "quarter of directions, or inside a closed double-sided object, is moved to a free spot in\n"
+    "its cell or dropped) and kept a margin off surfaces; then a Delaunay\n"
     "tetrahedralisation of the probes for interpolation. Writes, all or nothing:\n"
     "  PROBES.json   positions, kinds (grid, refined, moved, pinned), tetrahedra and their\n"
     "                neighbours, settings and summary (README: the light probes file)\n"
@@ -71,6 +72,9 @@ const char kProbesHelp[] =
     "                            resolution) to review and edit, and drawn yellow in PROBES.png;\n"
     "                            afterglow bake --probes PROBES.json captures them\n"
     "  --max-reflection-probes N at most this many (default 32), the best fitting first\n"
+    "  --unit-scale X            the level's metres per unit (0.01: centimetres, 0.001:\n"
+    "                            millimetres): scales it first, as afterglow bake --unit-scale\n"
+    "                            does; PROBES.json and --add's probes are in metres (default 1)\n"
     "  --width N, --height N     the picture's size (default 960 x 600)\n"
     "  --threads N               worker threads (default: every core); the output is identical\n"
     "                            for any count\n"
@@ -83,7 +87,9 @@ const char kProbesHelp[] =
     "value) for the six axis normals +X -X +Y -Y +Z -Z, or for each --normal given.\n"
     "OUT/transport.agt is solved as the bake solved it (from scratch, its bounce count from\n"
     "OUT/report.json), so a point on a probe gives that probe's SH in\n"
-    "OUT/probes/light_probes_sh.bin (deringed alike).\n"
+    "OUT/probes/light_probes_sh.bin (deringed alike). A folder afterglow relight wrote has no\n"
+    "transport: its relit probes (probes/light_probes.json and light_probes_sh.bin) are\n"
+    "interpolated as the runtime interpolates them. probes place --bake reads either.\n"
     "\n"
     "Options:\n"
     "  --at x,y,z                a point, metres in the scene's axes; repeatable; required\n"
@@ -121,7 +127,8 @@ std::optional<int> parsePlacement(Args& args, probes::PlacementJob* job, std::st
       !args.getInt("threads", 0, 0, 1024, threads) ||
       !args.getInt("max-reflection-probes", maxReflection, 1, 4096, &maxReflection) ||
       !args.getFloat("refine-threshold", job->refinement.threshold, 0.0f, 1e6f,
-                     &job->refinement.threshold))
+                     &job->refinement.threshold) ||
+      !getUnitScale(args, &job->unitScale))
     return kPlace.usage(args.error());
   job->bake = args.get("bake");
   if (args.has("bake") && job->bake.empty())
@@ -238,7 +245,8 @@ int runPlace(int argc, char** argv, int first) {
           args, argc, argv, first,
           {{"output", 'o'}, {"spacing"}, {"levels"}, {"margin"}, {"max-probes"}, {"add"},
            {"bake"}, {"refine-threshold"}, {"width"}, {"height"}, {"threads"},
-           {"reflection", 0, false}, {"max-reflection-probes"}, {"quiet", 0, false},
+           {"reflection", 0, false}, {"max-reflection-probes"}, kUnitScaleOption,
+           {"quiet", 0, false},
            {"help", 'h', false}},
           kPlace))
     return *stop;
@@ -256,6 +264,7 @@ int runPlace(int argc, char** argv, int first) {
   int code = kExitOk;
   Result<scenes::Scene> loaded = loadSceneOrExit(job.input, false, &code);
   if (!loaded) return code;
+  applyUnitScale(loaded.value(), job.unitScale, job.input);
   job.loadSeconds = secondsSince(start);
   // The bake first, so a wrong folder fails before the placement's work.
   std::optional<bakefiles::BakedProbes> baked;

@@ -1,6 +1,7 @@
-// `afterglow probes sample OUT/ --at x,y,z`: the bake's light probes interpolated at points, as
-// an engine's dynamic object there would be lit (runtime::Runtime::sampleProbes), as E/π per
-// normal or, with --json, with the tetrahedron, weights and SH for scripts.
+// `afterglow probes sample OUT/ --at x,y,z`: the bake's (or a relit folder's) light probes
+// interpolated at points, as an engine's dynamic object there would be lit
+// (runtime::Runtime::sampleProbes), as E/π per normal or, with --json, with the tetrahedron,
+// weights and SH for scripts.
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -67,7 +68,7 @@ int runProbesSample(int argc, char** argv, int first) {
     return kExitBadInput;
   }
   const bakefiles::BakedProbes& baked = loaded.value();
-  const runtime::ProbeTetrahedra& mesh = baked.runtime->data().probes.mesh;
+  const runtime::ProbeTetrahedra& mesh = baked.mesh();
 
   json all = json::array();
   for (const glm::vec3 p : points) {

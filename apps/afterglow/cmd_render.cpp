@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "afterglow/preview/exposure.h"
 #include "afterglow/preview/probe_spheres.h"
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/preview/render.h"
@@ -153,6 +154,24 @@ void printSpheres(const std::vector<preview::ProbeSphere>& spheres, int count, s
     which += (which.empty() ? "" : ", ") + std::to_string(s.probe);
   std::printf("spheres       %zu at probes %s (%s, albedo %.1f)\n", spheres.size(), which.c_str(),
               radius.c_str(), albedo);
+}
+
+// The PNG's exposure, and a warning when the lightmaps shown are essentially black for the
+// light the bake had (its report's sky, the glTF's lights and emission): auto exposure would
+// brighten their noise into a picture.
+void printBrightness(const std::string& input, const scenes::Scene& scene,
+                     const std::vector<bakefiles::LightmapImage>& lightmaps,
+                     const std::vector<glm::vec3>& image, float exposureStops, bool png) {
+  if (png)
+    std::printf("exposure      %s\n",
+                preview::describeExposure(preview::chooseExposure(image, exposureStops)).c_str());
+  if (lightmaps.empty()) return;  // --reference: lit by paths, not lightmaps
+  // A report that does not load (rendering a copied glTF) leaves a black sky: the lights and
+  // emission still give a scale.
+  Result<baker::Environment> environment = bakefiles::loadBakeEnvironment(input);
+  const std::string warning = preview::blackLightmapsWarning(
+      scene, lightmaps, environment ? environment.value() : baker::Environment(), input);
+  if (!warning.empty()) std::printf("warning       %s\n", warning.c_str());
 }
 
 }  // namespace
@@ -322,6 +341,7 @@ int runRender(int argc, char** argv, int first) {
     return kExitOutput;
   }
   if (!quiet) {
+    printBrightness(input, scene, lightmaps, image.value(), exposure, !exr);
     const std::string how =
         reference ? format("reference: path traced, %d paths per pixel", spp)
                   : std::string("baked: albedo x lightmap + emission") +

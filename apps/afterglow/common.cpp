@@ -10,6 +10,7 @@
 
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
+#include "afterglow/scenes/units.h"
 #include "commands.h"
 
 namespace afterglow::cli {
@@ -103,6 +104,18 @@ Result<scenes::Scene> loadSceneOrExit(const std::string& scene, bool loadTexture
     *exitCode = badArgument ? kExitUsage : kExitBadInput;
   }
   return loaded;
+}
+
+const OptionSpec kUnitScaleOption = {"unit-scale"};
+
+bool getUnitScale(Args& args, float* unitScale) {
+  return args.getFloat("unit-scale", 1.0f, 0.0f, 1e6f, unitScale);
+}
+
+void applyUnitScale(scenes::Scene& scene, float unitScale, const std::string& input) {
+  if (unitScale != 1.0f) scenes::scaleScene(scene, unitScale);
+  const std::string warning = scenes::unitsWarning(scenes::guessUnits(scene), input);
+  if (!warning.empty()) scene.warnings.push_back(warning);
 }
 
 namespace {

@@ -55,6 +55,17 @@ bool isBuiltinScene(const std::string& scene);
 Result<scenes::Scene> loadSceneOrExit(const std::string& scene, bool loadTextures,
                                       int* exitCode);
 
+// `--unit-scale X`, in the option list of every command that reads a level for its geometry
+// (info, bake, probes place): the level's metres per unit.
+extern const OptionSpec kUnitScaleOption;
+// --unit-scale's value (1 without it); false with args.error() set when it is not a positive
+// number.
+bool getUnitScale(Args& args, float* unitScale);
+// Scales a loaded level by unitScale (scenes::scaleScene) before anything reads it, then judges
+// its units (scenes/units.h): a level still not in metres gets the warning among its
+// warnings, which info, bake and probes place print and the bake's report keeps.
+void applyUnitScale(scenes::Scene& scene, float unitScale, const std::string& input);
+
 // Ctrl-C handling. installInterruptHandler(), first thing in main, makes the first SIGINT only
 // record the interrupt (interrupted() turns true) and cancel the Progress of the living
 // InterruptGuard, if any; it also puts back the default action, so a second Ctrl-C kills the

@@ -5,11 +5,11 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "afterglow/core/math.h"
+
 namespace afterglow::bakefiles {
 
 namespace {
-
-float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
 float srgbEncode(float x) {
   x = std::clamp(x, 0.0f, 1.0f);

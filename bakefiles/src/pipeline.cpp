@@ -162,6 +162,7 @@ json bakeSettings(const BakeJob& job, const UnwrapStep& unwrapped, const ProbeSe
           {"clusterTexels", o.clusters.clusterTexels},
           {"dilation", o.dilation},
           {"singleSidedEmission", job.singleSidedEmission},
+          {"unitScale", job.unitScale},
           {"threads", threadCount()},
           {"reference", o.reference},
           {"referenceSpp", o.referenceOptions.samples},
@@ -188,7 +189,7 @@ Result<BakedLevel> bakeLevel(scenes::Scene& scene, BakeJob& job, Progress& progr
 
   Clock::time_point t0 = Clock::now();
   Result<UnwrapStep> unwrapped = unwrapForBake(scene, job, progress);
-  report.extraStages.push_back({baker::Stage::Uv, secondsSince(t0)});
+  report.extraStages.push_back({Stage::Uv, secondsSince(t0)});
   if (!unwrapped) return unwrapped.status();
   report.warnings.insert(report.warnings.end(), unwrapped->warnings.begin(),
                          unwrapped->warnings.end());
@@ -213,7 +214,7 @@ Result<BakedLevel> bakeLevel(scenes::Scene& scene, BakeJob& job, Progress& progr
           "%s: %zu of its reflection probes left out: the scene's nodes author probes of those "
           "names",
           job.probes.c_str(), step.reflectionAuthored));
-    report.extraStages.push_back({baker::Stage::ProbePlacement, secondsSince(t0)});
+    report.extraStages.push_back({Stage::ProbePlacement, secondsSince(t0)});
     step.probes = &level.probes;
     events->probesReady(job, step);
   }

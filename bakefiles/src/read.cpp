@@ -158,15 +158,16 @@ Result<BakedReflections> loadBakedReflections(const std::string& gltfPath) {
   return out;
 }
 
-Result<LightProbes> loadLightProbes(const std::string& gltfPath) {
-  const std::string dir = fs::path(gltfPath).parent_path().string();
+namespace {
+
+// The light probes' two files in bake folder `dir`; `missing` follows the error for a file
+// that is not there.
+Result<LightProbes> readLightProbes(const std::string& dir, const std::string& missing) {
   const std::string jsonPath = inProbes(dir, kLightProbesJson);
   const std::string bin = inProbes(dir, kLightProbesSh);
   std::error_code ec;
   for (const std::string& path : {jsonPath, bin})
-    if (!fs::is_regular_file(path, ec))
-      return Status::error(path + ": no such file; --probe-spheres reads the light probes "
-                           "afterglow bake writes beside the scene.gltf (not with --probes none)");
+    if (!fs::is_regular_file(path, ec)) return Status::error(path + ": no such file" + missing);
   Result<probes::ProbesFile> file = probes::readProbesFile(jsonPath);
   if (!file) return file.status();
   runtime::ProbeShFile sh;
@@ -179,6 +180,14 @@ Result<LightProbes> loadLightProbes(const std::string& gltfPath) {
   out.mesh = std::move(file->mesh);
   out.sh = std::move(sh.sh);
   return out;
+}
+
+}  // namespace
+
+Result<LightProbes> loadLightProbes(const std::string& gltfPath) {
+  return readLightProbes(fs::path(gltfPath).parent_path().string(),
+                         "; --probe-spheres reads the light probes afterglow bake writes beside "
+                         "the scene.gltf (not with --probes none)");
 }
 
 Result<baker::Environment> loadBakeEnvironment(const std::string& gltfPath, bool* reportFound) {
@@ -214,7 +223,17 @@ Result<baker::Environment> loadBakeEnvironment(const std::string& gltfPath, bool
   return env;
 }
 
+const runtime::ProbeTetrahedra& BakedProbes::mesh() const {
+  return runtime ? runtime->data().probes.mesh : relit.mesh;
+}
+
 runtime::ShL2 BakedProbes::sample(glm::vec3 p, int* hint) const {
+  if (!runtime) {
+    // The relit SH file is deringed already, and interpolated as the runtime interpolates.
+    const runtime::ProbeLocation where = runtime::locateProbe(relit.mesh, p, hint ? *hint : 0);
+    if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
+    return runtime::mixProbes(where, relit.sh);
+  }
   const runtime::ShL2 sh = runtime->sampleProbes(p, hint);
   // Deringing scales each band: interpolating deringed probes is deringing the interpolation.
   return deringWindow > 0.0f ? runtime::deringed(sh, deringWindow) : sh;
@@ -231,12 +250,20 @@ Result<int> bakedBounces(const nlohmann::json& settings, const std::string& repo
 
 Result<BakedProbes> loadBakedProbes(const std::string& outDir) {
   BakedProbes out;
+  std::error_code ec;
+  if (!fs::exists(inFolder(outDir, kTransport), ec) &&
+      fs::is_regular_file(inProbes(outDir, kLightProbesJson), ec)) {
+    // `afterglow relight` writes no transport: the relit light is in the probes' SH file.
+    Result<LightProbes> relit = readLightProbes(outDir, "");
+    if (!relit) return relit.status();
+    out.relit = std::move(relit.value());
+    return out;
+  }
   out.transportPath = inFolder(outDir, kTransport);
 
   // The bake's settings, when its report is there (an engine's copy of the transport alone is
   // solved with the bake's defaults).
   const std::string reportPath = inFolder(outDir, kReport);
-  std::error_code ec;
   if (fs::exists(reportPath, ec)) {
     Result<std::string> text = readFile(reportPath);
     if (!text) return text.status();

@@ -258,14 +258,14 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   json stages = json::object();
   double total = 0.0;
   for (const baker::StageTime& s : info.extraStages) {
-    stages[baker::stageName(s.stage)] = s.seconds;
+    stages[stageName(s.stage)] = s.seconds;
     total += s.seconds;
   }
   json stageRays = json::object();
   for (const baker::StageTime& s : result.stages) {
-    stages[baker::stageName(s.stage)] = s.seconds;
+    stages[stageName(s.stage)] = s.seconds;
     total += s.seconds;
-    if (s.rays > 0) stageRays[baker::stageName(s.stage)] = s.rays;
+    if (s.rays > 0) stageRays[stageName(s.stage)] = s.rays;
   }
   stages["total"] = total;
   size_t lights = 0, emissive = 0;

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "afterglow/core/atomic_file.h"
+#include "afterglow/preview/exposure.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/scenes/material_eval.h"
 #include "afterglow/trace/raytracer.h"
@@ -106,8 +107,7 @@ Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene, const tra
 
 Status writeRenderPng(const std::string& path, int width, int height,
                       const std::vector<glm::vec3>& image, float exposureStops) {
-  const float exposure =
-      std::isnan(exposureStops) ? bakefiles::autoExposure(image) : std::exp2(exposureStops);
+  const float exposure = chooseExposure(image, exposureStops).scale;
   AtomicOutput out;
   if (Status s = bakefiles::writeTonemappedPng(path, width, height, image, exposure, out); !s) return s;
   return out.commit();

@@ -13,6 +13,8 @@
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/core/stages.h"
+#include "inside_test.h"
 #include "triangle_box.h"
 
 namespace afterglow::probes {
@@ -83,92 +85,47 @@ glm::ivec3 unpackKey(uint64_t k) {
 
 // What a candidate's rays see.
 struct Look {
-  float backFraction = 0.0f;  // rays that hit the back of single-sided static geometry
+  Sight sight;                // whether it is inside geometry (inside_test.h)
   float nearest = 1e30f;      // distance to the plane of the nearest hit surface
   glm::vec3 normal{0.0f};     // that surface's normal, on the candidate's side
-  glm::vec3 freeDir{0.0f};    // the mean direction of the rays that did not see a back face
+  glm::vec3 freeDir{0.0f};    // the mean direction of the rays that saw no surface's back
 };
 
 class Prober {
  public:
   Prober(const scenes::Scene& scene, const trace::RayTracer& tracer, int rays, float insideFraction)
-      : scene_(scene), tracer_(tracer), insideFraction_(insideFraction) {
-    // A spherical Fibonacci set, turned off the axes so no ray runs along an axis-aligned wall.
-    const int n = std::max(rays, 1);
-    const float golden = kPi * (3.0f - std::sqrt(5.0f));
-    for (int i = 0; i < n; ++i) {
-      const float z = 1.0f - (2.0f * float(i) + 1.0f) / float(n);
-      const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-      const float phi = golden * float(i) + 0.3f;
-      glm::vec3 d(r * std::cos(phi), r * std::sin(phi), z);
-      // A fixed tilt about x then y.
-      const float a = 0.17f, b = 0.11f;
-      d = glm::vec3(d.x, std::cos(a) * d.y - std::sin(a) * d.z, std::sin(a) * d.y + std::cos(a) * d.z);
-      d = glm::vec3(std::cos(b) * d.x + std::sin(b) * d.z, d.y, -std::sin(b) * d.x + std::cos(b) * d.z);
-      directions_.push_back(glm::normalize(d));
-    }
-    for (const scenes::Instance& inst : scene.instances) allStatic_ = allStatic_ && inst.isStatic;
-  }
+      : test_(scene, tracer, insideFraction), directions_(sphereDirections(std::max(rays, 1))) {}
 
-  bool inside(const Look& look) const { return look.backFraction >= insideFraction_; }
-  // A spot a candidate moves to must be outside by a clear margin, not just across the line: a
-  // move lands near the geometry it left, where a few rays more or less decide.
-  bool clearlyOutside(const Look& look) const {
-    return look.backFraction < 0.75f * insideFraction_;
-  }
+  bool inside(const Look& look) const { return test_.inside(look.sight); }
+  bool clearlyOutside(const Look& look) const { return test_.clearlyOutside(look.sight); }
 
   // marginReach: hits further than this along a ray cannot be the nearest surface of interest.
   Look look(glm::vec3 p, float marginReach) const {
-    const size_t n = directions_.size();
-    std::vector<trace::Ray> rays(n);
-    std::vector<trace::Hit> hits(n);
-    for (size_t i = 0; i < n; ++i) {
-      rays[i].origin = p;
-      rays[i].direction = directions_[i];
-    }
-    tracer_.intersect(rays.data(), hits.data(), n);
+    std::vector<trace::Hit> hits;
+    test_.firstHits(p, directions_, hits);
     Look out;
-    size_t back = 0;
+    out.sight = test_.judge(p, hits);
     glm::vec3 free(0.0f);
-    for (size_t i = 0; i < n; ++i) {
-      trace::Hit hit = hits[i];
-      // Dynamic objects are no walls: look past them.
-      for (int guard = 0; !allStatic_ && hit.valid() && guard < 16 &&
-                          !scene_.instances[hit.instance].isStatic;
-           ++guard) {
-        trace::Ray next = rays[i];
-        next.tnear = hit.t + 1e-5f * (1.0f + hit.t);
-        hit = tracer_.intersect(next);
-      }
-      if (hit.valid() && !scene_.instances[hit.instance].isStatic) hit = trace::Hit();
+    for (size_t i = 0; i < hits.size(); ++i) {
+      const trace::Hit& hit = hits[i];
       const glm::vec3 d = directions_[i];
-      if (!hit.valid()) {
-        free += d;
-        continue;
-      }
+      if (!hit.valid() || hit.frontFace) free += d;
+      if (!hit.valid() || hit.t > marginReach) continue;
       const float cosine = glm::dot(d, hit.geometricNormal);
-      if (!hit.frontFace && !tracer_.material(hit).doubleSided) ++back;
-      else free += d;
-      if (hit.t <= marginReach) {
-        const float planeDistance = hit.t * std::abs(cosine);
-        if (planeDistance < out.nearest) {
-          out.nearest = planeDistance;
-          out.normal = cosine < 0.0f ? hit.geometricNormal : -hit.geometricNormal;
-        }
+      const float planeDistance = hit.t * std::abs(cosine);
+      if (planeDistance < out.nearest) {
+        out.nearest = planeDistance;
+        out.normal = cosine < 0.0f ? hit.geometricNormal : -hit.geometricNormal;
       }
     }
-    out.backFraction = float(back) / float(n);
     const float len = glm::length(free);
     if (len > 1e-6f) out.freeDir = free / len;
     return out;
   }
 
  private:
-  const scenes::Scene& scene_;
-  const trace::RayTracer& tracer_;
-  float insideFraction_;
+  InsideTest test_;
   std::vector<glm::vec3> directions_;
-  bool allStatic_ = true;
 };
 
 // One candidate's fate.
@@ -572,7 +529,7 @@ Result<Placement> placeProbes(const scenes::Scene& scene, const trace::RayTracer
   // The ray tests, one slot per candidate.
   const Prober prober(scene, tracer, options.rays, options.insideFraction);
   std::vector<Outcome> outcomes(candidates.size());
-  progress.begin("probes", candidates.size());
+  progress.begin(stageName(Stage::ProbePlacement), candidates.size());
   parallelForBlocks(candidates.size(), [&](size_t begin, size_t end, int) {
     if (progress.cancelled()) return;
     for (size_t i = begin; i < end; ++i) {
@@ -617,8 +574,10 @@ Result<Placement> placeProbes(const scenes::Scene& scene, const trace::RayTracer
                                    : format("%zu", i);
       placement.warnings.push_back(format(
           "user probe %s at (%g, %g, %g) is inside geometry (%.0f%% of its rays see the backs of "
-          "single-sided surfaces); kept where it is",
-          name.c_str(), double(p.x), double(p.y), double(p.z), 100.0 * double(look.backFraction)));
+          "single-sided surfaces; a double-sided object winds %.2f times around it); kept where "
+          "it is",
+          name.c_str(), double(p.x), double(p.y), double(p.z),
+          100.0 * double(look.sight.backFraction), double(look.sight.winding)));
     }
     placement.positions.push_back(p);
     placement.kinds.push_back(ProbeKind::Pinned);

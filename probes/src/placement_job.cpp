@@ -82,6 +82,8 @@ json settingsJson(const PlacementJob& job, const PlacedProbes& out, bool refined
                    {"maxProbes", job.placement.maxProbes},
                    {"add", job.userProbesFile},
                    {"threads", threadCount()}};
+  // Only when scaled, as the options below: a placement of a level in metres reads as before.
+  if (job.unitScale != 1.0f) settings["unitScale"] = job.unitScale;
   if (refined) {
     settings["bake"] = job.bake;
     settings["refineThreshold"] = job.refinement.threshold;

@@ -9,7 +9,9 @@
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/probes/placement.h"
+#include "inside_test.h"
 
 namespace afterglow::probes {
 
@@ -22,24 +24,6 @@ constexpr float kEnclosed = 0.5f;        // fewer rays on surfaces' fronts: not 
 constexpr float kThin = 0.5f;            // a box thinner than this × the spacing is a gap
 constexpr float kMostlyKept = 0.5f;      // a box this much inside kept boxes adds nothing
 constexpr float kCentreMargin = 0.05f;   // the capture point stays this × spacing off surfaces
-
-// A spherical Fibonacci set, turned off the axes (as the light probes' rays) so no ray runs
-// along an axis-aligned wall or through a row of columns exactly.
-std::vector<glm::vec3> sphereDirections(int n) {
-  std::vector<glm::vec3> out;
-  const float golden = kPi * (3.0f - std::sqrt(5.0f));
-  for (int i = 0; i < n; ++i) {
-    const float z = 1.0f - (2.0f * float(i) + 1.0f) / float(n);
-    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    const float phi = golden * float(i) + 0.3f;
-    glm::vec3 d(r * std::cos(phi), r * std::sin(phi), z);
-    const float a = 0.17f, b = 0.11f;
-    d = glm::vec3(d.x, std::cos(a) * d.y - std::sin(a) * d.z, std::sin(a) * d.y + std::cos(a) * d.z);
-    d = glm::vec3(std::cos(b) * d.x + std::sin(b) * d.z, d.y, -std::sin(b) * d.x + std::cos(b) * d.z);
-    out.push_back(glm::normalize(d));
-  }
-  return out;
-}
 
 float quantile(std::vector<float>& values, float q) {
   const size_t k = std::min(values.size() - 1, size_t(q * float(values.size())));
@@ -68,42 +52,25 @@ class RoomMeter {
  public:
   RoomMeter(const scenes::Scene& scene, const trace::RayTracer& tracer, int rays,
             float insideFraction, const scenes::Bounds& bounds)
-      : scene_(scene), tracer_(tracer), directions_(sphereDirections(rays)),
-        insideFraction_(insideFraction), bounds_(bounds) {
-    for (const scenes::Instance& inst : scene.instances) allStatic_ = allStatic_ && inst.isStatic;
-  }
+      : tracer_(tracer), test_(scene, tracer, insideFraction), directions_(sphereDirections(rays)),
+        bounds_(bounds) {}
 
   Measure measure(glm::vec3 p) const {
     const size_t n = directions_.size();
-    std::vector<trace::Ray> rays(n);
-    std::vector<trace::Hit> hits(n);
-    for (size_t i = 0; i < n; ++i) {
-      rays[i].origin = p;
-      rays[i].direction = directions_[i];
-    }
-    tracer_.intersect(rays.data(), hits.data(), n);
+    std::vector<trace::Hit> hits;
+    test_.firstHits(p, directions_, hits);
     Measure m;
+    m.inside = test_.inside(test_.judge(p, hits));
+    if (m.inside) return m;
     std::vector<float> t(n, -1.0f);  // hit distances; -1 for a miss
-    size_t back = 0, front = 0;
+    size_t front = 0;
     for (size_t i = 0; i < n; ++i) {
-      trace::Hit hit = hits[i];
-      // Dynamic objects are no walls: look past them.
-      for (int guard = 0; !allStatic_ && hit.valid() && guard < 16 &&
-                          !scene_.instances[hit.instance].isStatic;
-           ++guard) {
-        trace::Ray next = rays[i];
-        next.tnear = hit.t + 1e-5f * (1.0f + hit.t);
-        hit = tracer_.intersect(next);
-      }
-      if (hit.valid() && !scene_.instances[hit.instance].isStatic) hit = trace::Hit();
+      const trace::Hit& hit = hits[i];
       if (!hit.valid()) continue;
-      if (!hit.frontFace && !tracer_.material(hit).doubleSided) ++back;
-      else ++front;
+      if (hit.frontFace || tracer_.material(hit).doubleSided) ++front;
       t[i] = hit.t;
     }
-    m.inside = float(back) >= insideFraction_ * float(n);
     m.enclosed = float(front) / float(n);
-    if (m.inside) return m;
 
     // The box: per axis direction, the wall quantile of the distances along it.
     const float cone = std::cos(kConeDegrees * kPi / 180.0f);
@@ -145,12 +112,10 @@ class RoomMeter {
   }
 
  private:
-  const scenes::Scene& scene_;
   const trace::RayTracer& tracer_;
+  InsideTest test_;
   std::vector<glm::vec3> directions_;
-  float insideFraction_;
   scenes::Bounds bounds_;
-  bool allStatic_ = true;
 };
 
 // Rounds to a quantum a person reads easily (a millimetre for a room, a centimetre for a
@@ -210,7 +175,7 @@ Result<ReflectionPlacement> placeReflectionProbes(const scenes::Scene& scene,
 
   const RoomMeter meter(scene, tracer, options.rays, options.insideFraction, bounds);
   std::vector<Measure> measures(points.size());
-  progress.begin("reflection probes", points.size());
+  progress.begin(stageStep(Stage::ProbePlacement, "reflection probes"), points.size());
   parallelForBlocks(points.size(), [&](size_t begin, size_t end, int) {
     if (progress.cancelled()) return;
     for (size_t i = begin; i < end; ++i) measures[i] = meter.measure(points[i]);

@@ -11,6 +11,7 @@
 #include "afterglow/core/check.h"
 #include "afterglow/core/timer.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/core/stages.h"
 
 namespace afterglow::uv {
 
@@ -218,7 +219,7 @@ Result<UnwrapResult> generate(Scene& scene, const UnwrapOptions& options, Progre
   std::iota(order.begin(), order.end(), size_t(0));
   std::stable_sort(order.begin(), order.end(),
                    [&](size_t a, size_t b) { return jobs[a].triangles > jobs[b].triangles; });
-  progress.begin("charts", totalTriangles);
+  progress.begin(stageStep(Stage::Uv, "charts"), totalTriangles);
   parallelFor(
       order.size(),
       [&](size_t k) {
@@ -259,7 +260,7 @@ Result<UnwrapResult> generate(Scene& scene, const UnwrapOptions& options, Progre
     }
     chartEnd[k] = charts.size();
   }
-  progress.begin("packing", 1);
+  progress.begin(stageStep(Stage::Uv, "packing"), 1);
   PackResult packed;
   if (!packs.empty()) {
     PackOptions cancellable = pack;
@@ -335,7 +336,7 @@ Result<UnwrapResult> generate(Scene& scene, const UnwrapOptions& options, Progre
   result.timings.apply = secondsSince(t0);
 
   t0 = Clock::now();
-  progress.begin("metrics", 1);
+  progress.begin(stageStep(Stage::Uv, "metrics"), 1);
   result.metrics = computeMetrics(scene, pack.padding);
   progress.advance(1);
   progress.end();
@@ -382,7 +383,7 @@ Result<UnwrapResult> keep(Scene& scene, const UnwrapOptions& options, Progress& 
     if (staticWithGeometry(scene, scene.instances[i])) statics.push_back(int(i));
 
   // Every static primitive must carry TEXCOORD_1 inside [0,1].
-  progress.begin("checking TEXCOORD_1", statics.size());
+  progress.begin(stageStep(Stage::Uv, "checking TEXCOORD_1"), statics.size());
   std::vector<double> worldAreas(statics.size()), uvAreas(statics.size());
   for (size_t k = 0; k < statics.size(); ++k) {
     Instance& inst = scene.instances[statics[k]];
@@ -489,7 +490,7 @@ Result<UnwrapResult> keep(Scene& scene, const UnwrapOptions& options, Progress& 
   result.timings.apply = secondsSince(t0);
 
   t0 = Clock::now();
-  progress.begin("metrics", 1);
+  progress.begin(stageStep(Stage::Uv, "metrics"), 1);
   result.metrics = computeMetrics(scene, options.pack.padding);
   progress.advance(1);
   progress.end();
@@ -555,7 +556,7 @@ Result<float> fitTexelsPerUnit(const Scene& scene, const UnwrapOptions& options,
   if (!(guess > 0.0f)) return Status::error("no static geometry to fit into an atlas");
   float lo = 0.0f, hi = guess;
   bool ok = false;
-  progress.begin("fitting the atlas", 16);
+  progress.begin(stageStep(Stage::Uv, "fitting the atlas"), 16);
   // Grow until it no longer fits, shrink until it does.
   for (int i = 0; i < 20; ++i) {
     if (Status s = fits(hi, &ok); !s) return s;

@@ -9,7 +9,7 @@
 
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/direct.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/core/parallel.h"
 #include "shading/emitters.h"
 #include "shading/light_model.h"

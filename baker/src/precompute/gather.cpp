@@ -14,7 +14,7 @@
 
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/gather.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/core/parallel.h"
 #include "precompute/gather_batch.h"
 #include "precompute/glass_sky.h"

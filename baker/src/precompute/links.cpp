@@ -12,7 +12,7 @@
 #include "afterglow/baker/clusters.h"
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/links.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/scenes/material_eval.h"
 #include "precompute/far_targets.h"

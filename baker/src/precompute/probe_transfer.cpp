@@ -4,8 +4,9 @@
 //
 // A probe casts one ray per cell of an equal-area grid over the sphere (probe_directions.h).
 // Per ray:
-//   - a hit takes its direction's share out of the sky's transfer (K = I − Σ_hits Ω Y Yᵀ: a
-//     probe in the open sees the sky exactly);
+//   - a miss adds its direction's share to the sky's transfer (K = Σ_misses Ω Y Yᵀ, with the
+//     misses' share of the grid's quadrature error: a probe in the open sees the sky exactly, one
+//     in a closed room none);
 //   - a hit on a lit surface links that surface's cluster (or the far cluster that stands in
 //     for it from this far) in the ray's region: a region's row is the mean over its rays, and
 //     the regions' means enter the SH through least-squares weights;
@@ -20,7 +21,7 @@
 
 #include "afterglow/trace/raytracer.h"
 #include "afterglow/baker/probe_transfer.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "shading/emitters.h"
@@ -41,7 +42,7 @@ using runtime::kShCount;
 // Per probe, what its rays and shadow rays gave, before the probes are joined in order.
 struct ProbeResult {
   runtime::SparseLinks rows;  // per region, its links (encoded in the worker: the join copies)
-  double blocked[runtime::kProbeSkyCount] = {};  // Σ_hits Ω Y_i Y_j
+  double blocked[runtime::kProbeSkyCount] = {};  // I − K: the sky the hits block
   std::vector<double> source;                    // sources × kShCount
 };
 
@@ -178,6 +179,17 @@ class ProbeTracer {
       const float* pk = &dirs_.products[size_t(r) * runtime::kProbeSkyCount];
       for (int k = 0; k < runtime::kProbeSkyCount; ++k) res.blocked[k] += weight * double(pk[k]);
     }
+    // The rays' sum over the whole sphere is the identity only up to the grid's quadrature
+    // error (I − Σ Ω Y Yᵀ, a few thousandths). The hits block their share of that error too, so
+    // the sky's transfer is the misses' sum plus the misses' share of it: exactly I for a probe
+    // in the open, exactly 0 for one in a closed room (which saw the error as a sky of a few
+    // thousandths, some of it negative).
+    const double hitShare = double(hits) / double(dirs_.rays);
+    for (int i = 0; i < kShCount; ++i)
+      for (int j = i; j < kShCount; ++j) {
+        const int k = runtime::probeSkyIndex(i, j);
+        res.blocked[k] += ((i == j ? 1.0 : 0.0) - dirs_.allProducts[k]) * hitShare;
+      }
   }
 
   // Probe p's direct light from every source: area samples on the emitters, shadow rays to the

@@ -1,5 +1,5 @@
 #include "afterglow/baker/reflection_capture.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // Texels: conservative rasterisation of TEXCOORD_1, one sample point per texel, and the
 // "push out" of samples that sit inside or behind nearby geometry.
 #include "afterglow/baker/texels.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 
 #include <algorithm>
 #include <cmath>

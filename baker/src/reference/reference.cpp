@@ -1,6 +1,6 @@
 // The reference path tracer (reference.h, path_tracer.h).
 #include "afterglow/baker/reference.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/runtime/probe_sh.h"
 
 #include <algorithm>

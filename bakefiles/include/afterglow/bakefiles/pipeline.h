@@ -38,6 +38,7 @@ struct BakeJob {
   size_t maxProbes = 100000;       // refuse an automatic placement of more
   float probeDering = 0.0f;        // the SH file's Hanning window (0: as baked)
   bool singleSidedEmission = false;  // recorded: the scene's materials are already set
+  float unitScale = 1.0f;          // recorded: metres per unit the scene was already scaled by
   float memoryBudgetGb = 8.0f;     // refuse bakes estimated above this ...
   bool overBudget = false;         // ... unless this is set
 };

@@ -56,16 +56,21 @@ Result<LightProbes> loadLightProbes(const std::string& gltfPath);
 Result<baker::Environment> loadBakeEnvironment(const std::string& gltfPath,
                                                bool* reportFound = nullptr);
 
-// A bake folder's light probes read back through the runtime, holding what the bake wrote to
-// probes/light_probes_sh.bin: `afterglow probes sample` and `probes place --bake`.
+// A bake folder's light probes read back: `afterglow probes sample` and `probes place --bake`.
+// A bake's through the runtime, holding what the bake wrote to probes/light_probes_sh.bin; a
+// folder `afterglow relight` wrote has no transport, and its relit light is that file.
 struct BakedProbes {
-  std::unique_ptr<runtime::Runtime> runtime;  // solved as the bake solved it
-  std::string transportPath;                  // OUT/transport.agt
+  std::unique_ptr<runtime::Runtime> runtime;  // solved as the bake solved it; null when relit
+  std::string transportPath;                  // OUT/transport.agt ("" when relit)
+  LightProbes relit;          // a relit folder's probes: its placement and its SH file
   int bounces = 0;            // the bake's bounce passes (report.json; 0: until converged)
   float deringWindow = 0.0f;  // the bake's --probe-dering (0: its SH are as solved)
 
-  // The probes' radiance SH at p (tetrahedral interpolation, Runtime::sampleProbes from *hint),
-  // deringed as the bake's SH file is: at a probe's position, that probe's SH in the file.
+  // The probes' positions and tetrahedra.
+  const runtime::ProbeTetrahedra& mesh() const;
+  // The probes' radiance SH at p (tetrahedral interpolation from *hint, as
+  // Runtime::sampleProbes), deringed as the bake's SH file is: at a probe's position, that
+  // probe's SH in the file.
   runtime::ShL2 sample(glm::vec3 p, int* hint) const;
 };
 // The bounce passes a bake ran, from its report's settings (0: until converged); an error
@@ -74,8 +79,10 @@ Result<int> bakedBounces(const nlohmann::json& settings, const std::string& repo
 // Loads OUT/transport.agt and solves it as `afterglow bake` did: from scratch, with the bake's
 // bounce count and tolerance (OUT/report.json's settings; without a report, until converged,
 // the bake's default), so the probes equal the bake's bit for bit (the runtime's update() runs
-// the solver's loop, and a fresh Runtime is black until its first update). Errors name the
-// file: no or a damaged transport, a report that is not one, a transport without light probes.
+// the solver's loop, and a fresh Runtime is black until its first update). A folder without a
+// transport but with probes/light_probes.json is one `afterglow relight` wrote: its probes are
+// read from their files. Errors name the file: no or a damaged transport, a report that is not
+// one, a transport without light probes, probe files that do not match.
 Result<BakedProbes> loadBakedProbes(const std::string& outDir);
 
 }  // namespace afterglow::bakefiles

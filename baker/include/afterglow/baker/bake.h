@@ -12,7 +12,7 @@
 
 #include "afterglow/baker/clusters.h"
 #include "afterglow/baker/options.h"
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 #include "afterglow/baker/texels.h"
 #include "afterglow/core/progress.h"
 #include "afterglow/core/status.h"

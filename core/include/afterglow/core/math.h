@@ -1,5 +1,5 @@
-// The math basics every library shares, defined once: π, a finiteness test for GLM vectors and
-// a 64-bit hash.
+// The math basics every library shares, defined once: π, a finiteness test for GLM vectors, a
+// linear colour's luminance and a 64-bit hash.
 // Header-only and GLM-only, so the runtime (which links GLM alone) uses it too.
 #pragma once
 
@@ -20,6 +20,9 @@ bool finite(const glm::vec<N, T, Q>& v) {
     if (!std::isfinite(v[i])) return false;
   return true;
 }
+
+// Rec. 709 luminance of a linear RGB colour.
+inline float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
 
 // SplitMix64's finaliser: a cheap, well-mixed 64-bit hash (the baker's random numbers, the ray
 // tracer's choices at glass).

@@ -1,9 +1,11 @@
 // `afterglow probes place`: where light probes go. A grid over the static geometry's bounds (or
 // over the probe volumes authored on glTF nodes), refined on an octree in cells that hold or
-// touch geometry, never inside geometry: a candidate whose rays mostly see the backs of
-// single-sided surfaces is inside, and is moved to a free spot within its cell or dropped;
-// probes nearer than a margin to a surface are pushed off it. Double-sided surfaces count as
-// thin, not as walls. The user's own probes are pinned and never moved.
+// touch geometry, never inside geometry: a candidate is inside when more than a quarter of its
+// rays see the backs of single-sided surfaces (DDGI's and Unity's probe validity), or more than
+// half the backs of one double-sided shell (a closed object, whatever its sidedness; an open
+// sheet never covers half: curtains and leaves stay thin). Such a candidate is moved to a free
+// spot within its cell (Unity's virtual offset) or dropped; probes nearer than a margin to a
+// surface are pushed off it. The user's own probes are pinned and never moved.
 #pragma once
 
 #include <cstdint>
@@ -28,7 +30,7 @@ struct PlacementOptions {
   float margin = 0.0f;         // metres kept from surfaces; 0: a tenth of the finest spacing
   size_t maxProbes = 100000;   // more is refused, with the count and how to lower it
   int rays = 64;               // rays per candidate for the inside-geometry test
-  float insideFraction = 0.5f; // a candidate whose rays see back faces this often is inside
+  float insideFraction = 0.25f; // a candidate whose rays see more single-sided backs is inside
   std::vector<glm::vec3> userProbes;  // pinned: kept as given, never moved
   std::vector<std::string> userNames; // names for the user probes' warnings ("" = index)
 };

@@ -27,6 +27,7 @@ namespace afterglow::probes {
 struct PlacementJob {
   std::string input;            // the SCENE argument, for messages and the settings
   std::string userProbesFile;   // where placement.userProbes came from, for the settings
+  float unitScale = 1.0f;       // metres per unit the scene was scaled by, for the settings
   PlacementOptions placement;
   std::string bake;             // the bake whose light refines (bakeLight), for the settings
   BakeRefinementOptions refinement;

@@ -7,8 +7,8 @@
 // (baker::fitReflectionProbeBox): along each of the six axis directions, the 80th percentile of
 // the distances, measured along that axis, of the rays within 30° of it that hit static geometry
 // (walls stand behind furniture); a direction whose rays all miss reaches the static bounds. A
-// candidate is dropped when it is inside geometry (the light probes' test: half of its rays see
-// the backs of single-sided surfaces), open (fewer than half of its rays hit the fronts of
+// candidate is dropped when it is inside geometry (the light probes' test: a quarter of its rays
+// see the backs of single-sided surfaces, or half those of one double-sided shell), open (fewer than half of its rays hit the fronts of
 // surfaces: outdoors, above the roofs), its box is thinner than half the grid's spacing (a gap
 // between a column and a wall), or the box's centre, where the probe captures, is not clearly
 // free (freeProbePositions).
@@ -60,7 +60,7 @@ struct ReflectionPlacementOptions {
   float spacing = 0.0f;        // metres between candidates; 0: autoSpacing(scene)
   size_t maxCandidates = 4096; // the spacing grows until the grid holds no more
   int rays = 1024;             // per candidate (~70 within 30° of each axis)
-  float insideFraction = 0.5f; // as the light probes' PlacementOptions
+  float insideFraction = 0.25f; // as the light probes' PlacementOptions
   int resolution = 128;        // of every proposal
 };
 

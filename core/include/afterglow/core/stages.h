@@ -1,12 +1,13 @@
 // The stages of a bake, in the order they run: the one list that the progress bar, report.json's
 // "stages" and "stageRays", and the CLI's summary take their names from. The first three and the
-// last are the pipeline's (bakefiles/pipeline.h), the rest the precompute's (bake.h), each a
-// function of its own stage header that can be run again on its own.
+// last are the pipeline's (bakefiles/pipeline.h), the rest the precompute's (baker/bake.h), each a
+// function of its own stage header that can be run again on its own. In core because every
+// library that reports progress on a bake (uv, probes, baker, bakefiles) names its steps by it.
 #pragma once
 
 #include <string>
 
-namespace afterglow::baker {
+namespace afterglow {
 
 enum class Stage {
   Load,               // the scene read (scenes::loadGltf)
@@ -34,4 +35,4 @@ const char* stageName(Stage stage);
 // A step of a stage for the progress bar: "gather: near geometry".
 std::string stageStep(Stage stage, const char* step);
 
-}  // namespace afterglow::baker
+}  // namespace afterglow

@@ -1,6 +1,6 @@
-#include "afterglow/baker/stages.h"
+#include "afterglow/core/stages.h"
 
-namespace afterglow::baker {
+namespace afterglow {
 
 const char* stageName(Stage stage) {
   // In the enum's order; report.json's keys, so existing reports keep their names.
@@ -16,4 +16,4 @@ std::string stageStep(Stage stage, const char* step) {
   return std::string(stageName(stage)) + ": " + step;
 }
 
-}  // namespace afterglow::baker
+}  // namespace afterglow
