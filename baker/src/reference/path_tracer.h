@@ -41,6 +41,11 @@ class PathTracer {
   // a miss). The BRDF (GGX, Smith height-correlated, Schlick) is sampled by its distribution of
   // normals, written here apart from the runtime's prefilter so the two check each other.
   glm::vec3 probeRadiance(const trace::Ray& ray, int specularDepth, sampling::Rng& rng) const;
+  // Radiance toward the camera as `afterglow render` shades a bake with reflection probes: as
+  // probeRadiance (the specular reflections followed specularDepth deep), but a miss is black as
+  // the render's is.
+  glm::vec3 cameraRadianceWithSpecular(const trace::Ray& ray, int specularDepth,
+                                       sampling::Rng& rng) const;
 
  private:
   // Light arriving at a path vertex by next-event estimation, as E/π (lights scaled by
