@@ -103,10 +103,19 @@ const std::string& bakedCornell() {
 TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
   const std::string out = bakedCornell();
   const std::vector<std::string> files = tree(out);
-  const std::vector<std::string> expected = {"lightmaps/lightmap0.exr", "lightmaps/lightmap0.png",
-                                             "probes/light_probes.json",
-                                             "probes/light_probes_sh.bin", "report.json",
-                                             "scene.bin", "scene.gltf", "transport.agt"};
+  // A default bake proposes a reflection probe for the room, so the sky's specular images
+  // (EXT_lights_image_based: 7 mips of 6 faces) and the probes' cube EXRs come too.
+  std::vector<std::string> expected = {"lightmaps/lightmap0.exr", "lightmaps/lightmap0.png",
+                                       "probes/dfg.exr", "probes/light_probes.json",
+                                       "probes/light_probes_sh.bin", "probes/reflection_1.exr",
+                                       "probes/reflection_probes.json",
+                                       "probes/reflection_sky.exr", "report.json",
+                                       "scene.bin", "scene.gltf", "transport.agt"};
+  for (int mip = 0; mip < 7; ++mip)
+    for (int face = 0; face < 6; ++face)
+      expected.push_back("probes/sky_specular_m" + std::to_string(mip) + "_f" +
+                         std::to_string(face) + ".png");
+  std::sort(expected.begin(), expected.end());
   EXPECT_EQ(files, expected);
 
   const json report = json::parse(slurp(out + "/report.json"));
@@ -227,7 +236,12 @@ TEST(CliBake, ReflectionProbesWriteCubeMapsDfgAndTheirJson) {
   EXPECT_EQ(room.at("fileMips"), 7);
   const double half[3] = {0.278, 0.2744, 0.2796};  // the room, 556 × 548.8 × 559.2 mm
   for (int a = 0; a < 3; ++a) {
-    EXPECT_NEAR(room.at("box").at("halfSize")[size_t(a)].get<double>(), half[a], 1e-5) << a;
+    // Box projection onto the walls; the influence reaching the blend distance (0.1) past them.
+    EXPECT_NEAR(room.at("projectionBox").at("halfSize")[size_t(a)].get<double>(), half[a], 1e-5)
+        << a;
+    EXPECT_NEAR(room.at("projectionBox").at("centre")[size_t(a)].get<double>(), half[a], 1e-5)
+        << a;
+    EXPECT_NEAR(room.at("box").at("halfSize")[size_t(a)].get<double>(), half[a] + 0.1, 1e-5) << a;
     EXPECT_NEAR(room.at("box").at("centre")[size_t(a)].get<double>(), half[a], 1e-5) << a;
     EXPECT_NEAR(room.at("capturePosition")[size_t(a)].get<double>(), half[a], 1e-5) << a;
   }

@@ -267,10 +267,13 @@ TEST(CliProbes, ReflectionProposesOneProbeForTheCornellBoxAndTheBakeCapturesIt) 
   const json& r = doc["reflectionProbes"][0];
   EXPECT_EQ(r["name"], "reflection_probe_0");
   const float room[3] = {0.556f, 0.5488f, 0.5592f};
+  // The projection box is the room (the influence box reaches past its walls: issue 28).
   for (size_t k = 0; k < 3; ++k) {
-    const float c = r["position"][k].get<float>(), half = 0.5f * r["size"][k].get<float>();
+    const float c = r["position"][k].get<float>();
+    const float half = 0.5f * r["projectionSize"][k].get<float>();
     EXPECT_NEAR(c - half, 0.0f, 0.03f) << "axis " << k;
     EXPECT_NEAR(c + half, room[k], 0.03f) << "axis " << k;
+    EXPECT_GT(r["size"][k].get<float>(), 2.0f * half);
   }
   EXPECT_EQ(r["resolution"], 128);
   EXPECT_EQ(r["boxProjection"], true);
@@ -298,6 +301,8 @@ TEST(CliProbes, ReflectionProposesOneProbeForTheCornellBoxAndTheBakeCapturesIt) 
     EXPECT_FLOAT_EQ(baked["probes"][1]["capturePosition"][k].get<float>(),
                     r["position"][k].get<float>());
     EXPECT_FLOAT_EQ(baked["probes"][1]["projectionBox"]["halfSize"][k].get<float>(),
+                    0.5f * r["projectionSize"][k].get<float>());
+    EXPECT_FLOAT_EQ(baked["probes"][1]["box"]["halfSize"][k].get<float>(),
                     0.5f * r["size"][k].get<float>());
   }
 

@@ -61,5 +61,16 @@ TEST(JsonText, ValuesAreFoundByTheirPath) {
   EXPECT_EQ(jsonValueOffset(text, {"nowhere"}), 0u);
 }
 
+// Bytes JSON has no place for, a NUL among them (strchr finds NUL in every delimiter list),
+// are stepped over one at a time: the walk ends. The fuzzer's input hung it.
+TEST(JsonText, StrayBytesAndNulsAreSteppedOver) {
+  const std::string text("{\"positios\": [], \"tetrahedra\": []}\0\0\0\"\n\x01@", 41);
+  EXPECT_EQ(jsonValueOffset(text, {"positions"}), 0u);
+  EXPECT_EQ(jsonValueOffset(text, {"tetrahedra"}), text.find("[]}"));
+  EXPECT_EQ(jsonPathAt(text, text.size()), JsonPath{});
+  const std::string inside("[1, \0\0, 2]", 10);
+  EXPECT_EQ(jsonValueOffset(inside, {"2"}), inside.find('2'));
+}
+
 }  // namespace
 }  // namespace afterglow::test

@@ -79,6 +79,10 @@ const char kBakeHelp[] =
     "                           probes place does), none, or a PROBES.json from probes place;\n"
     "                           a file's reflectionProbes (probes place --reflection) are\n"
     "                           captured too, except one named as a node's own\n"
+    "  --reflection-probes auto|none\n"
+    "                           auto (default): the scene's own reflection probes, or, when it\n"
+    "                           has none and --probes is auto, one proposed per room as probes\n"
+    "                           place --reflection does; none: no reflection probes\n"
     "  --probe-spacing M        metres between grid probes for auto (default: from the level)\n"
     "  --max-probes N           refuse an auto placement of more probes (default 100000)\n"
     "  --probe-dering W         write the probes' SH deringed with this Hanning window (e.g.\n"
@@ -109,7 +113,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},       {"single-sided-emission", 0, false},
     {"probes"},            {"probe-spacing"},   {"max-probes"},  {"probe-dering"},
-    {"reflection-bounces"}, kUnitScaleOption,
+    {"reflection-bounces"}, {"reflection-probes"}, kUnitScaleOption,
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
 
 // The settings file as `--name=value` arguments, placed before the command line's own so that
@@ -192,7 +196,11 @@ class PrintSteps : public bakefiles::PipelineEvents {
                       ? format("placed, spacing %.3g m", double(set.spacing)).c_str()
                       : job.probes.c_str(),
                   set.file.mesh.tetrahedra.size());
-      if (!set.file.reflectionProbes.empty())
+      if (step.proposed)
+        std::printf("reflection    %zu reflection probe%s proposed, one per room (as probes "
+                    "place --reflection; --reflection-probes none for none)\n",
+                    step.reflectionAdded, step.reflectionAdded == 1 ? "" : "s");
+      else if (!set.file.reflectionProbes.empty())
         std::printf("reflection    %zu reflection probe%s from %s (%zu named as the scene's "
                     "own, left out)\n",
                     step.reflectionAdded, step.reflectionAdded == 1 ? "" : "s",
@@ -303,6 +311,10 @@ int runBake(int argc, char** argv, int first) {
   options.reflections.bounces = uint32_t(reflectionBounces);
   job.maxProbes = size_t(maxProbes);
   job.probes = args.get("probes", "auto");
+  job.reflectionProbes = args.get("reflection-probes", "auto");
+  if (job.reflectionProbes != "auto" && job.reflectionProbes != "none")
+    return command.usage("--reflection-probes wants auto or none, got '" + job.reflectionProbes +
+                         "'");
   if (job.atlasSize > 0 && job.texelsPerUnit > 0.0f)
     return command.usage("give --texels-per-unit or --atlas-size, not both");
   options.reference = args.has("reference");

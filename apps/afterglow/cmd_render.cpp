@@ -32,11 +32,16 @@ const char kRenderHelp[] =
     "glTF's MOZ_lightmap materials) + its emission. VIEW.png is tone mapped to sRGB; VIEW.exr\n"
     "holds the linear picture as it is (32-bit float RGB radiance in the lightmaps' units, no\n"
     "exposure or tone map, row 0 at the top), to compare with other renderers' EXRs. Surfaces\n"
-    "without a lightmap (dynamic instances) show only their emission.\n"
+    "without a lightmap (dynamic instances) show only their emission. When the bake has\n"
+    "reflection probes (SCENE's folder/probes/reflection_probes.json), surfaces are shaded as an\n"
+    "engine would: the metallic-roughness BRDF's diffuse colour x lightmap + its specular\n"
+    "reflection from the probes.\n"
     "With --reference it path-traces the same view instead, to compare with: each visible\n"
-    "point is shaded the same way but with a path-traced estimate in place of its lightmap,\n"
-    "lit as the bake was (sky, sky image, indirect intensity and albedo boost from the\n"
-    "report.json beside SCENE.gltf; without one, a black sky and intensities 1).\n"
+    "point is shaded the same way but with a path-traced estimate in place of its lightmap and,\n"
+    "with reflection probes, its reflection path-traced too (GGX-sampled, 4 reflections deep),\n"
+    "so a mirror shows what it really reflects; lit as the bake was (sky, sky image, indirect\n"
+    "intensity and albedo boost from the report.json beside SCENE.gltf; without one, a black\n"
+    "sky and intensities 1).\n"
     "\n"
     "Options:\n"
     "  -o, --output VIEW.png|VIEW.exr\n"
@@ -62,8 +67,6 @@ const char kRenderHelp[] =
     "                           mirror and every third a rough metal (silver, roughness 0.4)\n"
     "                           lit by the reflection probes\n"
     "  --reference              path-trace the view instead of reading the lightmaps (slow)\n"
-    "Surfaces are shaded with the lightmaps, and, when the bake has reflection probes (SCENE's\n"
-    "folder/probes/reflection_probes.json), with their specular reflections as an engine would.\n"
     "  --spp N                  paths per pixel for --reference (default 256)\n"
     "  --threads N              worker threads (default: every core); the picture is\n"
     "                           identical for any count\n"
@@ -71,6 +74,11 @@ const char kRenderHelp[] =
     "  -h, --help               this help\n";
 
 namespace {
+
+// How many specular reflections --reference follows when the bake has reflection probes: the
+// probes' own capture follows two by default (pass 0 and one bounce); a reference a few deeper
+// shows what the probes leave out.
+constexpr int kReferenceReflections = 4;
 
 // Whether any instance has a lightmap layout: the reference path-traces only what a bake lit,
 // so without one its picture would be black but for emission.
@@ -325,7 +333,10 @@ int runRender(int argc, char** argv, int first) {
   }
   Result<std::vector<glm::vec3>> image =
       reference ? baker::renderReference(scene, *tracer.value(), environment, view, options.width,
-                                         options.height, spp, progress)
+                                         options.height, spp,
+                                         scene.reflectionProbes.empty() ? 0
+                                                                        : kReferenceReflections,
+                                         progress)
                 : preview::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress,
                                      spheres, &reflections);
   if (interrupted() || progress.cancelled()) return interruptedExit();
@@ -343,7 +354,10 @@ int runRender(int argc, char** argv, int first) {
   if (!quiet) {
     printBrightness(input, scene, lightmaps, image.value(), exposure, !exr);
     const std::string how =
-        reference ? format("reference: path traced, %d paths per pixel", spp)
+        reference ? format("reference: path traced, %d paths per pixel%s", spp,
+                           scene.reflectionProbes.empty()
+                               ? ""
+                               : format(", reflections %d deep", kReferenceReflections).c_str())
                   : std::string("baked: albedo x lightmap + emission") +
                         (spheres.empty() ? ""
                                          : format(", probe spheres %.1f x E/pi",

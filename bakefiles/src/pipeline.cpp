@@ -8,6 +8,7 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/core/timer.h"
 #include "afterglow/probes/placement.h"
+#include "afterglow/probes/reflection_placement.h"
 #include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/trace/raytracer.h"
 
@@ -18,8 +19,9 @@ namespace afterglow::bakefiles {
 
 namespace {
 
+// Placed as `probes place` places them, with its reflection probe proposals when `reflection`.
 Result<ProbeSet> placeBakeProbes(const scenes::Scene& scene, float spacing, size_t maxProbes,
-                                 Progress& progress) {
+                                 bool reflection, Progress& progress) {
   Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
   if (!tracer) return tracer.status();
   probes::PlacementOptions o;
@@ -42,6 +44,13 @@ Result<ProbeSet> placeBakeProbes(const scenes::Scene& scene, float spacing, size
                  {"refined", placed->refined},
                  {"tetrahedra", out.file.mesh.tetrahedra.size()},
                  {"warnings", placed->warnings}};
+  if (reflection) {
+    Result<probes::ReflectionPlacement> proposed =
+        probes::placeReflectionProbes(scene, *tracer.value(), {}, progress);
+    if (!proposed) return Status::error(scene.sourcePath + ": " + proposed.message());
+    out.file.reflectionProbes = std::move(proposed->probes);
+    out.summary["reflectionProbes"] = out.file.reflectionProbes.size();
+  }
   return out;
 }
 
@@ -118,13 +127,18 @@ Result<UnwrapStep> unwrapForBake(scenes::Scene& scene, BakeJob& job, Progress& p
 Result<ProbeSet> prepareProbes(scenes::Scene& scene, BakeJob& job, ProbeStep* step,
                                Progress& progress) {
   ProbeSet set;
+  if (job.reflectionProbes == "none") scene.reflectionProbes.clear();
   if (!bakesProbes(job)) return set;
+  step->proposed = job.probes == "auto" && job.reflectionProbes == "auto" &&
+                   scene.reflectionProbes.empty();
   Result<ProbeSet> got = job.probes == "auto"
-                             ? placeBakeProbes(scene, job.probeSpacing, job.maxProbes, progress)
+                             ? placeBakeProbes(scene, job.probeSpacing, job.maxProbes,
+                                               step->proposed, progress)
                              : readBakeProbes(job.probes);
   if (progress.cancelled()) return Status::error("cancelled");
   if (!got) return got.status();
   set = std::move(got.value());
+  if (job.reflectionProbes == "none") set.file.reflectionProbes.clear();
   job.bake.probes = set.file.mesh;
   for (const probes::ReflectionProbeEntry& r : set.file.reflectionProbes) {
     const bool authored =
@@ -169,6 +183,7 @@ json bakeSettings(const BakeJob& job, const UnwrapStep& unwrapped, const ProbeSe
           {"memoryBudgetGb", job.memoryBudgetGb},
           {"estimatedMemoryGb", unwrapped.estimatedGb},
           {"probes", job.probes},
+          {"reflectionProbes", job.reflectionProbes},
           {"probeSpacing", probes.spacing},
           {"probeDering", job.probeDering},
           {"probeRays", o.probeOptions.raysSide * o.probeOptions.raysSide},
@@ -203,12 +218,12 @@ Result<BakedLevel> bakeLevel(scenes::Scene& scene, BakeJob& job, Progress& progr
 
   // Before the bake, so that a bad probes file or too many probes stops it before minutes of
   // precompute.
+  t0 = Clock::now();
+  ProbeStep step;
+  Result<ProbeSet> probes = prepareProbes(scene, job, &step, progress);
+  if (!probes) return probes.status();
+  level.probes = std::move(probes.value());
   if (bakesProbes(job)) {
-    t0 = Clock::now();
-    ProbeStep step;
-    Result<ProbeSet> probes = prepareProbes(scene, job, &step, progress);
-    if (!probes) return probes.status();
-    level.probes = std::move(probes.value());
     if (step.reflectionAuthored > 0)
       report.warnings.push_back(format(
           "%s: %zu of its reflection probes left out: the scene's nodes author probes of those "

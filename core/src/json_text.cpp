@@ -1,7 +1,6 @@
 #include "afterglow/core/json_text.h"
 
 #include <algorithm>
-#include <cstring>
 
 #include <nlohmann/json.hpp>
 
@@ -10,6 +9,8 @@ namespace afterglow {
 namespace {
 
 bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
+// Not strchr: it finds a NUL byte in every string.
+bool isDelimiter(char c) { return c == ',' || c == ':' || c == ']' || c == '}'; }
 
 // Just past the string whose opening quote is at i (the text's end when it has no closing one).
 size_t stringEnd(const std::string& t, size_t i) {
@@ -63,7 +64,10 @@ JsonPath walkJson(const std::string& t, size_t limit, Visit visit) {
       } else if (c == '"') {
         i = stringEnd(t, i);
       } else {
-        while (i < t.size() && !isSpace(t[i]) && !std::strchr(",:]}", t[i])) ++i;
+        // A number or literal runs to a delimiter; anything else (a stray byte, a NUL) is one
+        // character, so the walk always moves on.
+        ++i;
+        while (i < t.size() && !isSpace(t[i]) && !isDelimiter(t[i])) ++i;
       }
     }
   }
@@ -119,11 +123,13 @@ std::optional<JsonSyntaxError> findJsonSyntaxError(const std::string& text) {
 
 size_t jsonValueOffset(const std::string& text, const JsonPath& path) {
   size_t found = 0, depth = 0;
+  bool rooted = false;  // the document's value seen (bytes after it are not its parts)
   walkJson(text, std::string::npos, [&](const JsonPath& at, size_t offset) {
     const bool onTheWay = at.size() <= path.size() && std::equal(at.begin(), at.end(), path.begin());
-    if (onTheWay && (at.empty() || at.size() > depth)) {
+    if (onTheWay && (at.empty() ? !rooted : at.size() > depth)) {
       found = offset;
       depth = at.size();
+      rooted = true;
     }
     return !(onTheWay && at.size() == path.size());
   });

@@ -59,14 +59,15 @@ std::string probesJson(const Placement& placement, const std::vector<std::string
     auto number = [](float v) { return json::parse(shortestDecimal(v)); };
     auto vec = [&](glm::vec3 v) { return json::array({number(v.x), number(v.y), number(v.z)}); };
     json reflections = json::array();
-    for (const ReflectionProbeEntry& r : reflectionProbes)
-      reflections.push_back({{"name", r.name},
-                             {"position", vec(r.position)},
-                             {"size", vec(r.size)},
-                             {"blendDistance", number(r.blendDistance)},
-                             {"importance", r.importance},
-                             {"boxProjection", r.boxProjection},
-                             {"resolution", r.resolution}});
+    for (const ReflectionProbeEntry& r : reflectionProbes) {
+      json entry = {{"name", r.name}, {"position", vec(r.position)}, {"size", vec(r.size)}};
+      if (r.projectionSize != glm::vec3(0.0f)) entry["projectionSize"] = vec(r.projectionSize);
+      entry["blendDistance"] = number(r.blendDistance);
+      entry["importance"] = r.importance;
+      entry["boxProjection"] = r.boxProjection;
+      entry["resolution"] = r.resolution;
+      reflections.push_back(std::move(entry));
+    }
     doc["reflectionProbes"] = std::move(reflections);
   }
   doc["settings"] = json::parse(settingsJson, nullptr, false);

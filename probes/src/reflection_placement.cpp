@@ -131,6 +131,7 @@ scenes::ReflectionProbe toSceneReflectionProbe(const ReflectionProbeEntry& entry
   probe.transform = glm::mat4(1.0f);
   probe.transform[3] = glm::vec4(entry.position, 1.0f);
   probe.size = entry.size;
+  probe.projectionSize = entry.projectionSize;
   probe.blendDistance = entry.blendDistance;
   probe.importance = entry.importance;
   probe.boxProjection = entry.boxProjection;
@@ -242,14 +243,19 @@ Result<ReflectionPlacement> placeReflectionProbes(const scenes::Scene& scene,
     ReflectionProbeEntry probe;
     probe.name = format("reflection_probe_%zu", out.probes.size());
     const glm::vec3 size = m.hi - m.lo;
-    for (int a = 0; a < 3; ++a) {
-      probe.position[a] = tidy(centre[a], quantum);
-      probe.size[a] = std::max(tidy(size[a], quantum), float(quantum));
-    }
     // A quarter of the room's smallest side, at most a metre (the glTF default), so the weight
     // fades in near the walls without a small room fading everywhere.
     probe.blendDistance =
         tidy(std::min(1.0f, 0.25f * std::min({size.x, size.y, size.z})), quantum);
+    // The walls are the projection box; the influence box reaches past them by the blend
+    // distance and a quarter more (the walls stand up to a few millimetres beyond the measured
+    // box), so the walls, and what stands on the floor, get the probe's full weight (a box that
+    // ended on the walls faded to 0 there, and a rough metal wall rendered black).
+    for (int a = 0; a < 3; ++a) {
+      probe.position[a] = tidy(centre[a], quantum);
+      probe.projectionSize[a] = std::max(tidy(size[a], quantum), float(quantum));
+      probe.size[a] = tidy(probe.projectionSize[a] + 2.5f * probe.blendDistance, quantum);
+    }
     probe.importance = 1;
     probe.boxProjection = true;
     probe.resolution = options.resolution;

@@ -142,6 +142,8 @@ Status readReflectionMembers(const json& r, const ProbesText& file, const std::s
   };
   if (Status st = vec3("position", false, e.position); !st) return st;
   if (Status st = vec3("size", true, e.size); !st) return st;
+  if (r.contains("projectionSize"))
+    if (Status st = vec3("projectionSize", true, e.projectionSize); !st) return st;
   if (auto it = r.find("blendDistance"); it != r.end()) {
     const double d = it->is_number() ? it->get<double>() : -1.0;
     if (!(std::isfinite(d) && d >= 0.0 && d < 1e9))
@@ -195,13 +197,13 @@ Status parseReflectionProbes(const json& doc, const ProbesText& file,
         return file.error(where + ": the name is taken by an earlier reflection probe",
                           {at[0], at[1], "name"});
     for (auto it = r.begin(); it != r.end(); ++it) {
-      static const char* const kKnown[] = {"name",       "position",      "size",
-                                           "blendDistance", "importance", "boxProjection",
-                                           "resolution"};
+      static const char* const kKnown[] = {"name",          "position",   "size",
+                                           "projectionSize", "blendDistance", "importance",
+                                           "boxProjection", "resolution"};
       if (std::find(std::begin(kKnown), std::end(kKnown), it.key()) == std::end(kKnown))
         return file.error(where + ": unknown member \"" + it.key() +
-                              "\" (known: name, position, size, blendDistance, importance, "
-                              "boxProjection, resolution)",
+                              "\" (known: name, position, size, projectionSize, blendDistance, "
+                              "importance, boxProjection, resolution)",
                           {at[0], at[1], it.key()});
     }
     if (Status st = readReflectionMembers(r, file, where, at, e); !st) return st;

@@ -194,11 +194,10 @@ glm::vec3 ReflectionLighting::radiance(const ReflectionTap* taps, int count,
   return radiance;
 }
 
-glm::vec3 ReflectionLighting::specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
-                                       glm::vec3 f0, float perceptualRoughness,
-                                       const glm::vec3* lightmap) const {
-  if (!boxes || !lights || !dfg || lights->empty()) return glm::vec3(0.0f);
-  if (f0 == glm::vec3(0.0f)) return glm::vec3(0.0f);
+glm::vec3 ReflectionLighting::reflected(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
+                                        float perceptualRoughness,
+                                        const glm::vec3* lightmap) const {
+  if (!boxes || !lights || lights->empty()) return glm::vec3(0.0f);
   ReflectionLookup lookups[kMaxReflectionBlend];
   const int count = reflectionLookups(*boxes, position, normal, toViewer, perceptualRoughness, lookups);
   ReflectionTap taps[kMaxReflectionBlend];
@@ -211,8 +210,18 @@ glm::vec3 ReflectionLighting::specular(glm::vec3 position, glm::vec3 normal, glm
                                  int(light.mips.size()));
   }
   if (used == 0) return glm::vec3(0.0f);
+  return radiance(taps, used, perceptualRoughness, lightmap);
+}
+
+glm::vec3 ReflectionLighting::specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
+                                       glm::vec3 f0, float perceptualRoughness,
+                                       const glm::vec3* lightmap) const {
+  if (!boxes || !lights || !dfg || lights->empty()) return glm::vec3(0.0f);
+  if (f0 == glm::vec3(0.0f)) return glm::vec3(0.0f);
+  const glm::vec3 l = reflected(position, normal, toViewer, perceptualRoughness, lightmap);
+  if (l == glm::vec3(0.0f)) return l;
   const glm::vec2 sb = sampleDfg(*dfg, dfgSize, glm::dot(normal, toViewer), perceptualRoughness);
-  return radiance(taps, used, perceptualRoughness, lightmap) * (f0 * sb.x + sb.y);
+  return l * (f0 * sb.x + sb.y);
 }
 
 ShL2 chainIrradianceSh(const CubemapChain& chain) {

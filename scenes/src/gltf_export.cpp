@@ -426,6 +426,7 @@ struct Exporter {
                  {"boxProjection", probe.boxProjection},
                  {"resolution", probe.resolution}};
       if (probe.size != glm::vec3(0.0f)) rp["size"] = vec(probe.size);
+      if (probe.projectionSize != glm::vec3(0.0f)) rp["projectionSize"] = vec(probe.projectionSize);
       node["extras"]["afterglow"]["reflectionProbe"] = std::move(rp);
       nodes.push_back(std::move(node));
     }

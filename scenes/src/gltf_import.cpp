@@ -1245,8 +1245,9 @@ class Importer {
     return Status::ok();
   }
 
-  // extras.afterglow.reflectionProbe = {"size": [x, y, z], "blendDistance": d, "importance": i,
-  // "boxProjection": b, "resolution": n}, every member optional (not inherited). A malformed
+  // extras.afterglow.reflectionProbe = {"size": [x, y, z], "projectionSize": [x, y, z],
+  // "blendDistance": d, "importance": i, "boxProjection": b, "resolution": n}, every member
+  // optional (not inherited). A malformed
   // member is an error naming it: a probe that silently took a default would light the wrong
   // region or blur the wrong way, and the level designer would not know why.
   Status readReflectionProbe(const tinygltf::Node& node, size_t index, const std::string& where,
@@ -1259,15 +1260,18 @@ class Importer {
     probe.name = node.name.empty() ? format("node%zu", index) : node.name;
     probe.node = int(index);
     probe.transform = narrowMat(world);
-    if (const tinygltf::Value* size = member(*rp, "size")) {
+    for (const auto& [name, out] : {std::pair<const char*, glm::vec3*>{"size", &probe.size},
+                                    {"projectionSize", &probe.projectionSize}}) {
+      const tinygltf::Value* size = member(*rp, name);
+      if (!size) continue;
       bool ok = size->IsArray() && size->ArrayLen() == 3;
       for (int i = 0; ok && i < 3; ++i) {
         const tinygltf::Value& c = size->Get(i);
         const double v = c.IsNumber() ? c.GetNumberAsDouble() : -1.0;
         ok = std::isfinite(v) && v > 0.0 && v < 1e9;
-        if (ok) probe.size[i] = float(v);
+        if (ok) (*out)[i] = float(v);
       }
-      if (!ok) return fail(key + ".size must be 3 positive finite numbers");
+      if (!ok) return fail(key + "." + name + " must be 3 positive finite numbers");
     }
     if (const tinygltf::Value* v = member(*rp, "blendDistance")) {
       const double d = v->IsNumber() ? v->GetNumberAsDouble() : -1.0;

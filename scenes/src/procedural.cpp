@@ -225,12 +225,15 @@ Scene makeCornellMetalBox() {
                         {0.0f, 548.8f, 0.0f});
   addQuad(front, q, roomCentre - quadCentre(q));
   addMeshInstance(scene, "front_wall", std::move(front));
-  // One reflection probe filling the room, and the camera moved inside, by the front wall.
+  // One reflection probe filling the room, and the camera moved inside, by the front wall. Its
+  // box projects onto the walls, and its influence reaches the blend distance beyond them, so
+  // everything in the room, the walls included, takes its full weight.
   ReflectionProbe probe;
   probe.name = "room_probe";
   probe.transform[3] = glm::vec4(roomCentre, 1.0f);
-  probe.size = mm({556.0f, 548.8f, 559.2f});
+  probe.projectionSize = mm({556.0f, 548.8f, 559.2f});
   probe.blendDistance = 0.1f;
+  probe.size = probe.projectionSize + glm::vec3(2.0f * probe.blendDistance);
   scene.reflectionProbes.push_back(probe);
   Camera& camera = scene.cameras.front();
   camera.transform[3] = glm::vec4(mm({278.0f, 273.0f, 20.0f}), 1.0f);

@@ -148,8 +148,14 @@ Status captureReflectionProbes(const scenes::Scene& scene, const trace::RayTrace
     box.importance = p.importance;
     box.boxProjection = p.boxProjection;
     if (!fitted) {
+      // The projection box: its own size when authored (the walls, the influence box reaching
+      // beyond them), else the influence box.
+      const glm::vec3 projection = p.projectionSize;
       box.projectionCentre = box.centre;
-      box.projectionHalfSize = box.halfSize;
+      box.projectionHalfSize =
+          projection.x > 0.0f && projection.y > 0.0f && projection.z > 0.0f
+              ? runtime::reflectionProbeBoxFromNode(p.transform, projection).halfSize
+              : box.halfSize;
     }
     std::vector<glm::vec3> directions(texels);
     std::vector<trace::Ray> rays(texels);

@@ -49,6 +49,11 @@ class PathTracer {
   // normals, written here apart from the runtime's prefilter so the two check each other.
   // Glass as for cameraRadiance.
   glm::vec3 probeRadiance(const trace::Ray& ray, int specularDepth, sampling::Rng& rng) const;
+  // Radiance toward the camera as `afterglow render` shades a bake with reflection probes: as
+  // probeRadiance (the specular reflections followed specularDepth deep), but a miss is black as
+  // the render's is.
+  glm::vec3 cameraRadianceWithSpecular(const trace::Ray& ray, int specularDepth,
+                                       sampling::Rng& rng) const;
 
  private:
   // Light arriving at a path vertex by next-event estimation, as E/π (lights scaled by

@@ -253,6 +253,12 @@ glm::vec3 PathTracer::probeRadiance(const trace::Ray& ray, int specularDepth, sa
                         probeRadiance(next, specularDepth - 1, rng);
 }
 
+glm::vec3 PathTracer::cameraRadianceWithSpecular(const trace::Ray& ray, int specularDepth,
+                                                 sampling::Rng& rng) const {
+  if (!tracer_.intersect(ray).valid()) return glm::vec3(0.0f);
+  return probeRadiance(ray, specularDepth, rng);
+}
+
 namespace {
 
 // The mean of a point's path estimates and the variance of that mean as if the paths were
@@ -484,7 +490,8 @@ Result<std::vector<glm::vec3>> renderReference(const scenes::Scene& scene,
                                                const trace::RayTracer& tracer,
                                                const Environment& environment,
                                                const trace::View& view, int width, int height,
-                                               int samplesPerPixel, Progress& progress) {
+                                               int samplesPerPixel, int specularDepth,
+                                               Progress& progress) {
   if (samplesPerPixel <= 0) return Status::error("render: samples per pixel must be positive");
   const PathTracer pathTracer(scene, tracer, environment, ReferenceOptions().maxDepth);
   const uint32_t spp = uint32_t(samplesPerPixel);
@@ -499,7 +506,9 @@ Result<std::vector<glm::vec3>> renderReference(const scenes::Scene& scene,
       const glm::vec2 jitter = sampling::stratified2(rng, s, spp);
       const trace::Ray ray = camera.ray(float(px) + jitter.x, float(py) + jitter.y);
       const glm::vec2 u = rng.next2();
-      sum += glm::dvec3(pathTracer.cameraRadiance(ray, u, rng));
+      sum += glm::dvec3(specularDepth > 0
+                            ? pathTracer.cameraRadianceWithSpecular(ray, specularDepth, rng)
+                            : pathTracer.cameraRadiance(ray, u, rng));
     }
     return glm::vec3(sum / double(spp));
   });

@@ -34,6 +34,9 @@ struct BakeJob {
   std::string quality = "default"; // the preset bake's options came from (for the report)
   baker::BakeOptions bake;         // its probes are filled from the probes below
   std::string probes = "auto";     // auto | none | a PROBES.json (probes place)
+  // auto: the scene's authored reflection probes, or (without any, and with probes auto) one
+  // proposed per room as `probes place --reflection` proposes them; none: no reflection probes.
+  std::string reflectionProbes = "auto";
   float probeSpacing = 0.0f;       // metres between automatic grid probes (0: from the level)
   size_t maxProbes = 100000;       // refuse an automatic placement of more
   float probeDering = 0.0f;        // the SH file's Hanning window (0: as baked)
@@ -53,10 +56,12 @@ struct UnwrapStep {
   std::vector<std::string> warnings;
 };
 
-// After the probes: how many, and the reflection probes their file added to the scene.
+// After the probes: how many, and the reflection probes their file (or the proposals) added to
+// the scene.
 struct ProbeStep {
   const ProbeSet* probes = nullptr;
-  size_t reflectionAdded = 0;     // the file's reflection probes joining the scene's
+  bool proposed = false;          // the reflection probes are proposals, not a file's
+  size_t reflectionAdded = 0;     // reflection probes joining the scene's
   size_t reflectionAuthored = 0;  // left out: a node of the scene authors one of that name
 };
 
@@ -89,8 +94,10 @@ double estimateBakeBytes(const scenes::Scene& scene, size_t texels, size_t atlas
                          float texelsPerUnit, const baker::BakeOptions& options);
 
 // The light probes of job.probes: placed (as `probes place` does), read from a file, or none;
-// fills job.bake.probes. A file's reflection probes join the scene's, except where a node of
-// the scene authors one of the same name (the level's own wins over a proposal).
+// fills job.bake.probes. A file's reflection probes, or with probes auto and none authored the
+// proposals of `probes place --reflection`, join the scene's, except where a node of the scene
+// authors one of the same name (the level's own wins over a proposal); with
+// job.reflectionProbes none the scene keeps none.
 Result<ProbeSet> prepareProbes(scenes::Scene& scene, BakeJob& job, ProbeStep* step,
                                Progress& progress = nullProgress());
 

@@ -94,13 +94,16 @@ Result<ReferencePoints> referenceRadiance(const scenes::Scene& scene, const trac
 // rays through stratified jittered points of the pixel, each shaded as a bake is rendered
 // (emission + diffuse albedo × one path's E/π at the first hit, with the given sky and
 // intensities), so it differs from preview::renderBaked only by the bake's error and its own
-// noise. Row 0 at the top. Deterministic whatever the thread count: every sample is seeded from
-// (pixel, sample).
+// noise. With specularDepth > 0, as a bake with reflection probes renders instead: the
+// metallic-roughness BRDF's diffuse colour × E/π plus its specular reflection, path-traced
+// (GGX-sampled) specularDepth reflections deep, so a mirror shows what it really reflects where
+// the render shows a box-projected probe. Row 0 at the top. Deterministic whatever the thread
+// count: every sample is seeded from (pixel, sample).
 Result<std::vector<glm::vec3>> renderReference(const scenes::Scene& scene,
                                                const trace::RayTracer& tracer,
                                                const Environment& environment,
                                                const trace::View& view, int width, int height,
-                                               int samplesPerPixel,
+                                               int samplesPerPixel, int specularDepth = 0,
                                                Progress& progress = nullProgress());
 
 // How far a bake's texels are from the reference, as errors relative to each texel's own

@@ -45,7 +45,9 @@ namespace afterglow::probes {
 struct ReflectionProbeEntry {
   std::string name;
   glm::vec3 position{0.0f};  // metres, world (glTF axes)
-  glm::vec3 size{1.0f};      // metres along the world axes, each > 0
+  glm::vec3 size{1.0f};      // metres along the world axes, each > 0: the influence box
+  glm::vec3 projectionSize{0.0f};  // the box projection's box, centred with it (the room's
+                                   //   walls); 0: the influence box
   float blendDistance = 1.0f;
   int importance = 1;
   bool boxProjection = true;

@@ -179,6 +179,11 @@ struct ReflectionLighting {
 
   glm::vec3 specular(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer, glm::vec3 f0,
                      float perceptualRoughness, const glm::vec3* lightmap = nullptr) const;
+  // The radiance those probes show along the point's reflection (specular() before the split
+  // sum's F0 · scale + bias): what a mirror shows, to compare with the light along the
+  // reflected ray.
+  glm::vec3 reflected(glm::vec3 position, glm::vec3 normal, glm::vec3 toViewer,
+                      float perceptualRoughness, const glm::vec3* lightmap = nullptr) const;
   // The radiance of a point's taps (before F0 · scale + bias), normalised by `lightmap` when
   // given: the dynamic half of specular(). Taps of a probe without a chain yet read black.
   glm::vec3 radiance(const ReflectionTap* taps, int count, float perceptualRoughness,

@@ -190,6 +190,10 @@ struct ReflectionProbe {
   glm::mat4 transform{1.0f};      // node to world
   glm::vec3 size{0.0f};           // "size": metres along the node's axes (before its scale);
                                   //   0 = fitted by the bake
+  // "projectionSize": the box that box projection intersects, centred with it (HDRP's proxy
+  // volume: the room's walls, where the influence box reaches blendDistance beyond them so that
+  // the walls get the probe's full weight); 0 = the influence box itself.
+  glm::vec3 projectionSize{0.0f};
   float blendDistance = 1.0f;     // "blendDistance": metres inside the box over which it fades
   int importance = 1;             // "importance": a higher one wins where boxes overlap
   bool boxProjection = true;      // "boxProjection": parallax-corrected lookups
