@@ -7,6 +7,7 @@
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/transport.h"
+#include "printable_name.h"
 
 namespace afterglow::runtime {
 
@@ -34,7 +35,7 @@ std::string ReflectionTransport::validate(size_t materials, size_t atlases) cons
   uint64_t next = 0;
   for (size_t i = 0; i < probes.size(); ++i) {
     const ReflectionProbeCapture& p = probes[i];
-    const std::string name = "reflection probe " + std::to_string(i) + " '" + p.name + "'";
+    const std::string name = "reflection probe " + std::to_string(i) + " '" + printableName(p.name) + "'";
     if (p.resolution == 0 || p.resolution > 2048 || (p.resolution & (p.resolution - 1)) != 0)
       return name + ": resolution " + std::to_string(p.resolution) +
              " is not a power of two up to 2048";

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "afterglow/runtime/transport.h"
+#include "printable_name.h"
 
 namespace afterglow::runtime {
 
@@ -325,11 +326,11 @@ std::string TransportData::validate() const {
     if ((!s.texelTransfer.empty() && s.texelTransfer.size() != texels) ||
         (!s.clusterTransfer.empty() && s.clusterTransfer.size() != clusters) ||
         (!s.probeTransfer.empty() && s.probeTransfer.size() != probeCount * kShCount)) {
-      why << "source " << i << " ('" << s.name << "'): transfer sizes do not match";
+      why << "source " << i << " ('" << printableName(s.name) << "'): transfer sizes do not match";
       return why.str();
     }
     if (s.kind == SourceKind::Emissive && s.material >= materials.size()) {
-      why << "source " << i << " ('" << s.name << "'): material " << s.material << " of "
+      why << "source " << i << " ('" << printableName(s.name) << "'): material " << s.material << " of "
           << materials.size();
       return why.str();
     }

@@ -958,5 +958,19 @@ TEST(TransportFile, LargeTransportSavesAndLoadsQuickly) {
   std::filesystem::remove(path);
 }
 
+// A name read from a file is quoted with its control bytes escaped, so an error stays one line
+// (the transport fuzzer's input: a reflection probe named with a newline and resolution 0).
+TEST(TransportFile, ErrorsQuoteNamesOnOneLine) {
+  ReflectionTransport r;
+  ReflectionProbeCapture probe;
+  probe.name = std::string("h\x9f\n\0x", 5);
+  probe.resolution = 0;
+  r.probes.push_back(probe);
+  const std::string why = r.validate(0, 0);
+  EXPECT_EQ(why.find('\n'), std::string::npos) << why;
+  EXPECT_EQ(why.find('\0'), std::string::npos) << why;
+  EXPECT_NE(why.find("'h\x9f\\x0a\\x00x'"), std::string::npos) << why;
+}
+
 }  // namespace
 }  // namespace afterglow::runtime
