@@ -432,15 +432,17 @@ void probesBesideBlocks(const std::string& path, float unitScale, const char* na
   *out = BesideBlocks{probes, vsIrradiance, floor};
 }
 
+// Both Cornell boxes of ../shared/scenes: file, the scale to metres, and a name.
+const std::tuple<const char*, float, const char*> kCornellBoxes[] = {
+    {"cornell_box_mcguire/CornellBox-Original.gltf", 1.0f, "McGuire's Cornell box"},
+    {"cornell_box_bevy/CornellBox.glb", 0.001f,
+     "Bevy's Cornell box (millimetres, scaled to metres)"}};
+
 // Beside the blocks no probe value falls below half of what a perfect probe there holds (the
 // reference's radiance on SH L2 at the point): probes inside the blocks once took a share of the
 // blocks' darkness. (SH L2 itself reads as low as 36% of the true irradiance at these points.)
 TEST(ProbesBesideObjects, NoneDarkBesideTheCornellBoxesBlocks) {
-  for (const auto& [file, scale, name] :
-       {std::tuple<const char*, float, const char*>{"cornell_box_mcguire/CornellBox-Original.gltf",
-                                                    1.0f, "McGuire's Cornell box"},
-        {"cornell_box_bevy/CornellBox.glb", 0.001f,
-         "Bevy's Cornell box (millimetres, scaled to metres)"}}) {
+  for (const auto& [file, scale, name] : kCornellBoxes) {
     AG_REQUIRE_SHARED_SCENE(path, file);
     BesideBlocks r;
     probesBesideBlocks(path, scale, name, &r);
@@ -454,11 +456,7 @@ TEST(ProbesBesideObjects, NoneDarkBesideTheCornellBoxesBlocks) {
 // 10% off that SH; so the bound needs a better irradiance than SH L2's clamped cosine, and more
 // exact probes beside surfaces (1024 rays a probe instead of 256 take McGuire's 15% to 10%).
 TEST(ProbesBesideObjects, DISABLED_WithinFifteenPercentOfTheReferenceIrradiance) {
-  for (const auto& [file, scale, name] :
-       {std::tuple<const char*, float, const char*>{"cornell_box_mcguire/CornellBox-Original.gltf",
-                                                    1.0f, "McGuire's Cornell box"},
-        {"cornell_box_bevy/CornellBox.glb", 0.001f,
-         "Bevy's Cornell box (millimetres, scaled to metres)"}}) {
+  for (const auto& [file, scale, name] : kCornellBoxes) {
     AG_REQUIRE_SHARED_SCENE(path, file);
     BesideBlocks r;
     probesBesideBlocks(path, scale, name, &r);

@@ -9,24 +9,11 @@
 
 #include "afterglow/core/math.h"
 #include "afterglow/core/parallel.h"
+#include "afterglow/core/union_find.h"
 
 namespace afterglow::probes {
 
 namespace {
-
-// Union-find over triangles.
-struct Joins {
-  std::vector<uint32_t> parent;
-  explicit Joins(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void join(uint32_t a, uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 struct PositionKey {
   uint32_t bits[3];
@@ -63,7 +50,7 @@ uint32_t meshShells(const scenes::Mesh& mesh, std::vector<uint32_t>& shell,
       corners.push_back(c);
     }
   }
-  Joins joins(corners.size());
+  UnionFind joins(corners.size());
   std::unordered_map<uint64_t, uint32_t> edgeOwner;  // an edge's first triangle
   for (uint32_t t = 0; t < corners.size(); ++t)
     for (int k = 0; k < 3; ++k) {
@@ -71,7 +58,7 @@ uint32_t meshShells(const scenes::Mesh& mesh, std::vector<uint32_t>& shell,
       if (a == ~0u || b == ~0u || a == b) continue;
       if (a > b) std::swap(a, b);
       const auto [it, inserted] = edgeOwner.emplace((uint64_t(a) << 32) | b, t);
-      if (!inserted) joins.join(t, it->second);
+      if (!inserted) joins.unite(t, it->second);
     }
   shell.resize(corners.size());
   std::unordered_map<uint32_t, uint32_t> number;

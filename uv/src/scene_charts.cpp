@@ -4,25 +4,11 @@
 #include <cstring>
 #include <numeric>
 
+#include "afterglow/core/union_find.h"
 #include "afterglow/uv/texel_raster.h"
 
 namespace afterglow::uv::detail {
 namespace {
-
-struct UnionFind {
-  std::vector<uint32_t> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  uint32_t find(uint32_t v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-  }
-  // The smaller root wins, so the result does not depend on the order of unions.
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a), b = find(b);
-    if (a < b) parent[b] = a;
-    else if (b < a) parent[a] = b;
-  }
-};
 
 bool usableUv(const scenes::Primitive& prim) {
   return !prim.uv1.empty() && prim.uv1.size() == prim.positions.size();
