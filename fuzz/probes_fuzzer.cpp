@@ -40,10 +40,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   runtime::ProbeShFile sh;
   std::string error;
   if (runtime::parseProbeSh(data, size, sh, &error)) {
-    if (size != runtime::kProbeShHeaderSize + sh.sh.size() * 27 * 4) std::abort();
+    const runtime::ProbeDirectionList& d = sh.directions;
+    const size_t section = d.start.empty() ? 0 : 4 + d.start.size() * 4 + d.lights.size() * 24;
+    if (size != runtime::kProbeShHeaderSize + sh.sh.size() * 27 * 4 + section) std::abort();
     for (const runtime::ShL2& s : sh.sh)
       for (const glm::vec3& c : s.c)
         if (!afterglow::finite(c)) std::abort();
+    if (!d.start.empty() && (d.count() != sh.sh.size() || d.start.back() != d.lights.size()))
+      std::abort();
+    for (size_t p = 0; p < d.count(); ++p)
+      if (d.start[p] > d.start[p + 1]) std::abort();
+    for (const runtime::ProbeDirection& l : d.lights)
+      if (!afterglow::finite(l.direction) || !afterglow::finite(l.power) ||
+          std::abs(glm::length(l.direction) - 1.0f) > 1e-3f)
+        std::abort();
   } else if (error.empty() || error.find('\n') != std::string::npos) {
     std::abort();
   }

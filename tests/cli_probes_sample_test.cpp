@@ -42,6 +42,7 @@ TEST(CliProbesSample, AtAProbeGivesItsShFromTheBakesFile) {
   const size_t n = file.sh.size();
   ASSERT_EQ(probes.at("positions").size(), n);
   ASSERT_GT(n, 100u);
+  EXPECT_FALSE(file.directions.lights.empty()) << "the lamp is read as a direction";
 
   const std::vector<size_t> which = {0, n / 3, n / 2, n - 1};
   std::string at;
@@ -68,9 +69,15 @@ TEST(CliProbesSample, AtAProbeGivesItsShFromTheBakesFile) {
     for (size_t i = 0; i < 27; ++i)
       EXPECT_NEAR(g["sh"][i].get<float>(), want.c[i / 3][int(i % 3)], 1e-6f * scale)
           << "probe " << which[k] << " coefficient " << i;
+    // E/π: the SH with the probe's small sources as directions, as the file holds them.
+    ASSERT_EQ(file.directions.count(), n);
+    runtime::ProbeLighting lighting{want, {}};
+    for (uint32_t d = file.directions.start[which[k]]; d < file.directions.start[which[k] + 1]; ++d)
+      lighting.lights.push_back(file.directions.lights[d]);
+    ASSERT_EQ(g.at("directions").size(), lighting.lights.size()) << "probe " << which[k];
     ASSERT_EQ(g.at("irradiance").size(), 6u);
     for (size_t a = 0; a < 6; ++a) {
-      const glm::vec3 e = runtime::irradianceOverPi(want, axes[a]);
+      const glm::vec3 e = lighting.irradianceOverPi(axes[a], file.deringWindow);
       for (int c = 0; c < 3; ++c)
         EXPECT_NEAR(g["irradiance"][a]["value"][size_t(c)].get<float>(), e[c], 1e-5f * scale)
             << "probe " << which[k] << " normal " << a;
@@ -92,7 +99,10 @@ TEST(CliProbesSample, AtAProbeGivesItsShFromTheBakesFile) {
   ASSERT_NE(value, std::string::npos) << first;
   float r = 0, g = 0, b = 0;
   ASSERT_EQ(std::sscanf(first.c_str() + value + 8, "%f,%f,%f", &r, &g, &b), 3) << first;
-  const glm::vec3 up = runtime::irradianceOverPi(file.sh[probe], {0, 1, 0});
+  runtime::ProbeLighting atProbe{file.sh[probe], {}};
+  for (uint32_t d = file.directions.start[probe]; d < file.directions.start[probe + 1]; ++d)
+    atProbe.lights.push_back(file.directions.lights[d]);
+  const glm::vec3 up = atProbe.irradianceOverPi({0, 1, 0}, file.deringWindow);
   EXPECT_NEAR(r, up.r, 1e-5f * up.r);
   EXPECT_NEAR(g, up.g, 1e-5f * up.g);
   EXPECT_NEAR(b, up.b, 1e-5f * up.b);

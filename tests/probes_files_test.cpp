@@ -123,9 +123,43 @@ TEST(ProbesFiles, TheShFileRoundTripsAndRefusesDamage) {
   EXPECT_FALSE(runtime::parseProbeSh(nan.data(), nan.size(), back, &error));
   EXPECT_NE(error.find("probe 1"), std::string::npos) << error;
   std::vector<uint8_t> version = bytes;
-  version[8] = 2;
+  version[8] = 3;
   EXPECT_FALSE(runtime::parseProbeSh(version.data(), version.size(), back, &error));
-  EXPECT_NE(error.find("version 2"), std::string::npos) << error;
+  EXPECT_NE(error.find("version 3"), std::string::npos) << error;
+  // Version 1 (the same bytes without directions) still reads.
+  std::vector<uint8_t> one = bytes;
+  one[8] = 1;
+  EXPECT_TRUE(runtime::parseProbeSh(one.data(), one.size(), back, &error)) << error;
+
+  // With directions (probe_lights.h): probe 0 has two, probe 1 none, probe 2 one.
+  file.directions.start = {0, 2, 2, 3};
+  file.directions.lights = {{glm::vec3(0, 1, 0), glm::vec3(1, 2, 3)},
+                            {glm::normalize(glm::vec3(1, 1, 0)), glm::vec3(0.5f)},
+                            {glm::vec3(0, 0, -1), glm::vec3(4, 0, 0)}};
+  const std::vector<uint8_t> withDirections = runtime::serializeProbeSh(file);
+  ASSERT_EQ(withDirections.size(), bytes.size() + 4 + 4 * 4 + 3 * 6 * 4);
+  ASSERT_TRUE(runtime::parseProbeSh(withDirections.data(), withDirections.size(), back, &error))
+      << error;
+  EXPECT_EQ(back.directions.start, file.directions.start);
+  ASSERT_EQ(back.directions.lights.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(back.directions.lights[k].direction, file.directions.lights[k].direction);
+    EXPECT_EQ(back.directions.lights[k].power, file.directions.lights[k].power);
+  }
+  const size_t section = bytes.size();  // M, then start[0..3], then the directions
+  std::vector<uint8_t> order = withDirections;
+  order[section + 4 + 2 * 4] = 1;  // start[2] = 1 < start[1] = 2
+  EXPECT_FALSE(runtime::parseProbeSh(order.data(), order.size(), back, &error));
+  EXPECT_NE(error.find("probe 2: its directions start at 1"), std::string::npos) << error;
+  std::vector<uint8_t> count = withDirections;
+  count[section] = 200;  // M no longer matches the size
+  EXPECT_FALSE(runtime::parseProbeSh(count.data(), count.size(), back, &error));
+  EXPECT_NE(error.find("bytes"), std::string::npos) << error;
+  std::vector<uint8_t> length = withDirections;
+  const float two = 2.0f;
+  std::memcpy(length.data() + section + 4 + 4 * 4 + 6 * 4, &two, 4);  // direction 1's x
+  EXPECT_FALSE(runtime::parseProbeSh(length.data(), length.size(), back, &error));
+  EXPECT_NE(error.find("direction 1"), std::string::npos) << error;
 }
 
 TEST(ProbesFiles, BakeRefusesBadProbesAndWritesNothing) {

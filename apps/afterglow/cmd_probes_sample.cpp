@@ -1,7 +1,7 @@
 // `afterglow probes sample OUT/ --at x,y,z`: the bake's (or a relit folder's) light probes
 // interpolated at points, as an engine's dynamic object there would be lit
-// (runtime::Runtime::sampleProbes), as E/π per normal or, with --json, with the tetrahedron,
-// weights and SH for scripts.
+// (runtime::Runtime::sampleProbeLighting), as E/π per normal or, with --json, with the
+// tetrahedron, weights, SH and directions for scripts.
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -74,10 +74,11 @@ int runProbesSample(int argc, char** argv, int first) {
   for (const glm::vec3 p : points) {
     // Each point walks from the first tetrahedron, so its answer does not depend on the others.
     int hint = 0;
-    const runtime::ShL2 sh = baked.sample(p, &hint);
+    const runtime::ProbeLighting lighting = baked.sampleLighting(p, &hint);
+    const runtime::ShL2& sh = lighting.sh;
     const runtime::ProbeLocation where = runtime::locateProbe(mesh, p, 0);
     std::vector<glm::vec3> values;
-    for (const Normal& n : normals) values.push_back(runtime::Runtime::evaluateIrradiance(sh, n.n));
+    for (const Normal& n : normals) values.push_back(lighting.irradianceOverPi(n.n, baked.window()));
     if (!args.has("json")) {
       std::string line = vecText(p);
       for (size_t k = 0; k < normals.size(); ++k)
@@ -87,7 +88,10 @@ int runProbesSample(int argc, char** argv, int first) {
       std::printf("%s\n", line.c_str());
       continue;
     }
-    json coefficients = json::array(), irradiance = json::array();
+    json coefficients = json::array(), irradiance = json::array(), directions = json::array();
+    for (const runtime::ProbeDirection& d : lighting.lights)
+      directions.push_back({{"direction", {d.direction.x, d.direction.y, d.direction.z}},
+                            {"power", {d.power.r, d.power.g, d.power.b}}});
     for (const glm::vec3& c : sh.c)
       for (int k = 0; k < 3; ++k) coefficients.push_back(c[k]);
     for (size_t k = 0; k < normals.size(); ++k)
@@ -99,6 +103,7 @@ int runProbesSample(int argc, char** argv, int first) {
                    {"probes", {where.probes.x, where.probes.y, where.probes.z, where.probes.w}},
                    {"weights", {where.weights.x, where.weights.y, where.weights.z, where.weights.w}},
                    {"sh", coefficients},
+                   {"directions", directions},
                    {"irradiance", irradiance}});
   }
   // One point's object a line: readable, and still one JSON array.

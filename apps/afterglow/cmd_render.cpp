@@ -66,6 +66,9 @@ const char kRenderHelp[] =
     "                           With reflection probes in the bake, every second sphere is a\n"
     "                           mirror and every third a rough metal (silver, roughness 0.4)\n"
     "                           lit by the reflection probes\n"
+    "  --sphere-at X,Y,Z,R      a diffuse sphere of radius R at X,Y,Z (metres) lit by the light\n"
+    "                           probes there, as --probe-spheres draws them; repeatable, and\n"
+    "                           with --probe-spheres drawn besides its spheres\n"
     "  --reference              path-trace the view instead of reading the lightmaps (slow)\n"
     "  --spp N                  paths per pixel for --reference (default 256)\n"
     "  --threads N              worker threads (default: every core); the picture is\n"
@@ -199,6 +202,7 @@ int runRender(int argc, char** argv, int first) {
                                              {"threads"},
                                              {"reference", 0, false},
                                              {"probe-spheres", 0, true, isSphereCount},
+                                             {"sphere-at"},
                                              {"spp"},
                                              {"quiet", 0, false},
                                              {"help", 'h', false}},
@@ -246,6 +250,22 @@ int runRender(int argc, char** argv, int first) {
       return command.usage("--probe-spheres reads the light probes afterglow bake wrote beside "
                            "the scene; render the scene.gltf it wrote, not " + input);
   }
+  // Spheres at given points (x, y, z, radius).
+  std::vector<glm::vec4> sphereAt;
+  for (const std::string& a : args.getAll("sphere-at")) {
+    std::vector<float> v;
+    if (!parseFloats(a, v) || v.size() != 4 || !(v[3] > 0.0f))
+      return command.usage("--sphere-at wants x,y,z,radius (metres, radius > 0), got '" + a + "'");
+    sphereAt.emplace_back(v[0], v[1], v[2], v[3]);
+  }
+  if (!sphereAt.empty()) {
+    if (args.has("reference"))
+      return command.usage("--sphere-at draws into the baked view; the --reference path tracer "
+                           "has no probes");
+    if (isBuiltinScene(input))
+      return command.usage("--sphere-at reads the light probes afterglow bake wrote beside the "
+                           "scene; render the scene.gltf it wrote, not " + input);
+  }
   glm::vec3 from(0.0f), at(0.0f);
   const bool lookAt = args.has("look-from") || args.has("look-at");
   if (lookAt) {
@@ -276,7 +296,7 @@ int runRender(int argc, char** argv, int first) {
       code != kExitOk)
     return code;
   bakefiles::LightProbes lightProbes;
-  if (sphereCount >= 0) {
+  if (sphereCount >= 0 || !sphereAt.empty()) {
     Result<bakefiles::LightProbes> probes = bakefiles::loadLightProbes(input);
     if (!probes) {
       printError(probes.message());
@@ -317,6 +337,7 @@ int runRender(int argc, char** argv, int first) {
     return kExitBadInput;
   }
   std::vector<preview::ProbeSphere> spheres;
+  for (const glm::vec4& s : sphereAt) spheres.push_back(preview::sphereAt(lightProbes, glm::vec3(s), s.w));
   if (sphereCount >= 0) {
     Result<std::vector<preview::ProbeSphere>> chosen = preview::chooseProbeSpheres(
         *tracer.value(), lightProbes, view, options.width, options.height, sphereCount);
@@ -324,12 +345,12 @@ int runRender(int argc, char** argv, int first) {
       printError(input + ": light probes: " + chosen.message());
       return kExitBadInput;
     }
-    spheres = std::move(chosen.value());
     // With reflection probes every second and third sphere is a mirror and a rough metal.
     if (!reflections.empty())
-      for (size_t i = 0; i < spheres.size(); ++i)
-        spheres[i].finish = preview::SphereFinish(i % 3);
-    if (!quiet) printSpheres(spheres, sphereCount, lightProbes.sh.size());
+      for (size_t i = 0; i < chosen->size(); ++i)
+        (*chosen)[i].finish = preview::SphereFinish(i % 3);
+    if (!quiet) printSpheres(chosen.value(), sphereCount, lightProbes.sh.size());
+    spheres.insert(spheres.end(), chosen->begin(), chosen->end());
   }
   Result<std::vector<glm::vec3>> image =
       reference ? baker::renderReference(scene, *tracer.value(), environment, view, options.width,

@@ -250,6 +250,8 @@ Result<std::vector<std::string>> writeBakeFolder(const scenes::Scene& scene,
   if (!written) return written;
   if (!level.result.probeSh.empty())
     if (Status st = writeLightProbes(outDir, level.probes, level.result.probeSh,
+                                     runtime::probeLights(level.result.transport,
+                                                          runtime::sourceScales(level.result.transport)),
                                      level.probeDering, level.report.settings, out,
                                      written.value());
         !st)

@@ -179,6 +179,8 @@ Result<LightProbes> readLightProbes(const std::string& dir, const std::string& m
   LightProbes out;
   out.mesh = std::move(file->mesh);
   out.sh = std::move(sh.sh);
+  out.directions = std::move(sh.directions);
+  out.deringWindow = sh.deringWindow;
   return out;
 }
 
@@ -223,6 +225,10 @@ Result<baker::Environment> loadBakeEnvironment(const std::string& gltfPath, bool
   return env;
 }
 
+runtime::ProbeLighting LightProbes::sample(glm::vec3 p, int hint) const {
+  return runtime::mixProbeLighting(runtime::locateProbe(mesh, p, hint), sh, directions);
+}
+
 const runtime::ProbeTetrahedra& BakedProbes::mesh() const {
   return runtime ? runtime->data().probes.mesh : relit.mesh;
 }
@@ -237,6 +243,17 @@ runtime::ShL2 BakedProbes::sample(glm::vec3 p, int* hint) const {
   const runtime::ShL2 sh = runtime->sampleProbes(p, hint);
   // Deringing scales each band: interpolating deringed probes is deringing the interpolation.
   return deringWindow > 0.0f ? runtime::deringed(sh, deringWindow) : sh;
+}
+
+runtime::ProbeLighting BakedProbes::sampleLighting(glm::vec3 p, int* hint) const {
+  if (!runtime) {
+    const runtime::ProbeLocation where = runtime::locateProbe(relit.mesh, p, hint ? *hint : 0);
+    if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
+    return runtime::mixProbeLighting(where, relit.sh, relit.directions);
+  }
+  runtime::ProbeLighting lighting = runtime->sampleProbeLighting(p, hint);
+  if (deringWindow > 0.0f) lighting.sh = runtime::deringed(lighting.sh, deringWindow);
+  return lighting;
 }
 
 Result<int> bakedBounces(const nlohmann::json& settings, const std::string& reportPath) {

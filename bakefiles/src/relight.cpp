@@ -246,6 +246,7 @@ Result<std::optional<RelitLightProbes>> relightProbes(RelitBake& bake) {
     if (shFile.deringWindow > 0.0f)
       shFile.sh[size_t(i)] = runtime::deringed(shFile.sh[size_t(i)], shFile.deringWindow);
   }
+  shFile.directions = rt.probeLights();
   const std::vector<uint8_t> bytes = runtime::serializeProbeSh(shFile);
   return std::optional<RelitLightProbes>(RelitLightProbes{
       doc.dump() + "\n", std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size())});

@@ -165,7 +165,8 @@ Result<json> writeLightmaps(const std::vector<runtime::AtlasLayout>& layouts,
 }
 
 Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
-                        const std::vector<runtime::ShL2>& sh, float dering,
+                        const std::vector<runtime::ShL2>& sh,
+                        const runtime::ProbeDirectionList& directions, float dering,
                         const json& bakeSettings, AtomicOutput& out,
                         std::vector<std::string>& written) {
   probes::Placement placement;
@@ -189,6 +190,7 @@ Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
   runtime::ProbeShFile file;
   file.deringWindow = dering;
   file.sh = sh;
+  file.directions = directions;
   if (dering > 0.0f)
     for (runtime::ShL2& s : file.sh) s = runtime::deringed(s, dering);
   const std::vector<uint8_t> bytes = runtime::serializeProbeSh(file);

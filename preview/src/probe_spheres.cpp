@@ -115,11 +115,6 @@ float clearRadius(const trace::RayTracer& tracer, glm::vec3 centre, float radius
   return std::min(radius, kWallGap * nearest);
 }
 
-// The probes' radiance SH at p: the tetrahedral weights of the probes around it.
-runtime::ShL2 sampleProbes(const bakefiles::LightProbes& probes, glm::vec3 p, int hint) {
-  return runtime::mixProbes(runtime::locateProbe(probes.mesh, p, hint), probes.sh);
-}
-
 // One candidate of a handful: where it lands on the picture and how big it looks.
 struct Candidate {
   int probe;
@@ -284,9 +279,23 @@ Result<std::vector<ProbeSphere>> chooseProbeSpheres(const trace::RayTracer& trac
     s.probe = picked[i].probe;
     s.centre = probes.mesh.positions[size_t(s.probe)];
     s.radius = picked[i].radius;
-    s.sh = sampleProbes(probes, s.centre, hint[size_t(s.probe)]);
+    runtime::ProbeLighting lighting = probes.sample(s.centre, hint[size_t(s.probe)]);
+    s.sh = lighting.sh;
+    s.directions = std::move(lighting.lights);
+    s.window = probes.deringWindow;
   }, 64);
   return spheres;
+}
+
+ProbeSphere sphereAt(const bakefiles::LightProbes& probes, glm::vec3 centre, float radius) {
+  ProbeSphere s;
+  s.centre = centre;
+  s.radius = radius;
+  runtime::ProbeLighting lighting = probes.sample(centre, 0);
+  s.sh = lighting.sh;
+  s.directions = std::move(lighting.lights);
+  s.window = probes.deringWindow;
+  return s;
 }
 
 ProbeSphereIndex::ProbeSphereIndex(const std::vector<ProbeSphere>& spheres, const trace::View& view,
@@ -346,7 +355,8 @@ bool ProbeSphereIndex::shade(const trace::Ray& ray, int px, int py, float tMax,
   const glm::vec3 normal = glm::normalize(position - s.centre);
   // The L2 series rings below zero opposite a strong light; no surface reflects less than
   // nothing.
-  const glm::vec3 irradiance = glm::max(runtime::irradianceOverPi(s.sh, normal), 0.0f);
+  const runtime::ProbeLighting lighting{s.sh, s.directions};
+  const glm::vec3 irradiance = glm::max(lighting.irradianceOverPi(normal, s.window), 0.0f);
   if (s.finish == SphereFinish::Diffuse) {
     *radiance = kProbeSphereAlbedo * irradiance;
     return true;

@@ -127,6 +127,12 @@ int afterglow_runtime_sample_probes(const AfterglowRuntime* runtime, float x, fl
 /* E/π (rgb) for a unit normal from 27 SH floats. */
 void afterglow_runtime_evaluate_irradiance(const float* sh27, float nx, float ny, float nz,
                                            float* rgb);
+/* E/π (rgb) at (x, y, z) for a unit normal from the probes there with their small light sources
+ * read as directions (probe_lights.h): closer to the truth than the SH alone beside objects lit
+ * by a small lamp. *hint as afterglow_runtime_sample_probes. */
+int afterglow_runtime_sample_probe_irradiance(const AfterglowRuntime* runtime, float x, float y,
+                                              float z, float nx, float ny, float nz, int* hint,
+                                              float* rgb);
 /* Refreshes the probes alone (budget_ms > 0: round robin within the budget); stats may be NULL. */
 int afterglow_runtime_update_probes(AfterglowRuntime* runtime, double budget_ms,
                                     AfterglowUpdateStats* stats);

@@ -216,6 +216,16 @@ void afterglow_runtime_evaluate_irradiance(const float* sh27, float nx, float ny
   rgb[0] = e.x, rgb[1] = e.y, rgb[2] = e.z;
 }
 
+int afterglow_runtime_sample_probe_irradiance(const AfterglowRuntime* rt, float x, float y,
+                                              float z, float nx, float ny, float nz, int* hint,
+                                              float* rgb) {
+  if (!rt || !rgb) return 0;
+  const glm::vec3 e =
+      rt->runtime->sampleProbeLighting(glm::vec3(x, y, z), hint).irradianceOverPi(glm::vec3(nx, ny, nz));
+  rgb[0] = e.x, rgb[1] = e.y, rgb[2] = e.z;
+  return 1;
+}
+
 int afterglow_runtime_update_probes(AfterglowRuntime* rt, double budget_ms,
                                     AfterglowUpdateStats* stats) {
   if (!rt) return 0;

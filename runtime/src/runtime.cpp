@@ -63,6 +63,10 @@ Runtime::Runtime(TransportData data) : data_(std::move(data)) {
     for (const AtlasLayout& layout : data_.atlases)
       images_[b].emplace_back(size_t(layout.width) * size_t(layout.height), glm::vec3(0.0f));
     probes_[b].assign(data_.probes.count(), ShL2());
+    if (data_.probes.count() > 0) {
+      probeLights_[b].start.reserve(data_.probes.count() + 1);
+      probeLights_[b].lights.reserve(probeLightCapacity(data_));
+    }
   }
   probeWork_.assign(data_.probes.count(), ShL2());
   if (data_.reflections.count() > 0) {
@@ -353,6 +357,7 @@ size_t Runtime::refreshProbes(size_t first, size_t count) {
 void Runtime::publishProbes() {
   const int back = 1 - probeFront_;  // written only here, under updateMutex_
   std::copy(probeWork_.begin(), probeWork_.end(), probes_[back].begin());
+  runtime::probeLights(data_, solver_->sourceScales(), probeLights_[back]);
   std::lock_guard<std::mutex> lock(outputMutex_);
   probeFront_ = back;
 }
@@ -410,6 +415,23 @@ ShL2 Runtime::sampleProbes(glm::vec3 position, int* hint) const {
 
 glm::vec3 Runtime::evaluateIrradiance(const ShL2& sh, glm::vec3 normal) {
   return irradianceOverPi(sh, normal);
+}
+
+ProbeLighting Runtime::sampleProbeLighting(glm::vec3 position, int* hint) const {
+  if (probeCount() == 0) return ProbeLighting();
+  const ProbeLocation where = locateProbe(data_.probes.mesh, position, hint ? *hint : 0);
+  if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  return mixProbeLighting(where, probes_[probeFront_], probeLights_[probeFront_]);
+}
+
+glm::vec3 Runtime::evaluateIrradiance(const ProbeLighting& lighting, glm::vec3 normal) {
+  return lighting.irradianceOverPi(normal);
+}
+
+ProbeDirectionList Runtime::probeLights() const {
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  return probeLights_[probeFront_];
 }
 
 // ---- Output -----------------------------------------------------------------------------------

@@ -39,12 +39,6 @@ glm::vec3 evalSky(const glm::vec3 sh[kShCount], const uint16_t* transfer) {
   return sum;
 }
 
-glm::vec3 sourceScale(const TransportData& data, const Source& s) {
-  if (!s.enabled) return glm::vec3(0.0f);
-  if (s.kind == SourceKind::Emissive) return data.materials[s.material].emission;
-  return s.color * s.intensity;
-}
-
 // Σ weight[k] · x[column[k]] over a row of a SparseMatrix of vec4 values.
 inline glm::vec4 mixRow(const SparseMatrix& m, size_t row, const glm::vec4* x) {
   glm::vec4 sum(0.0f);

@@ -137,6 +137,12 @@ uint16_t floatToHalf(float value) {
 }
 
 
+glm::vec3 sourceScale(const TransportData& data, const Source& s) {
+  if (!s.enabled) return glm::vec3(0.0f);
+  if (s.kind == SourceKind::Emissive) return data.materials[s.material].emission;
+  return s.color * s.intensity;
+}
+
 namespace {
 
 // Checks a row-compressed matrix's shape: rows+1 ascending offsets ending at the entry count,

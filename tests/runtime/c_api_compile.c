@@ -75,6 +75,9 @@ int afterglow_test_c_probes(const char* path, float* out) {
   ok &= afterglow_runtime_sample_probes(rt, 0.25f, 0.25f, 0.25f, &hint, out + 27);
   ok &= afterglow_runtime_probe_position(rt, 2, out + 54);
   afterglow_runtime_evaluate_irradiance(out + 27, n, 2.0f * n, 3.0f * n, out + 60);
+  hint = 0;
+  ok &= afterglow_runtime_sample_probe_irradiance(rt, 0.25f, 0.25f, 0.25f, n, 2.0f * n, 3.0f * n,
+                                                  &hint, out + 63);
   ok &= afterglow_runtime_update_probes(rt, 0.0, &stats) && stats.probes == 5;
   ok &= afterglow_runtime_probe_count(NULL) == 0;
   afterglow_runtime_free(rt);

@@ -822,7 +822,7 @@ TEST(RuntimeApi, CApiMatchesTheCppApi) {
     auto probes = Runtime::load(path, &error);
     ASSERT_TRUE(probes) << error;
     probes->update(scratch(4));
-    float fromCProbes[27 * 3 + 3] = {};
+    float fromCProbes[27 * 3 + 6] = {};
     EXPECT_EQ(afterglow_test_c_probes(path.c_str(), fromCProbes), 1);
     std::filesystem::remove(path);
     ShL2 own;
@@ -837,6 +837,9 @@ TEST(RuntimeApi, CApiMatchesTheCppApi) {
     EXPECT_EQ(fromCProbes[54], 0.0f);  // probe 2's position (0, 1, 0)
     EXPECT_EQ(fromCProbes[55], 1.0f);
     for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(fromCProbes[57 + 3 + c], e[c]);
+    const glm::vec3 lit = Runtime::evaluateIrradiance(
+        probes->sampleProbeLighting(glm::vec3(0.25f, 0.25f, 0.25f)), glm::normalize(glm::vec3(1, 2, 3)));
+    for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(fromCProbes[63 + c], lit[c]);
   }
   EXPECT_EQ(afterglow_runtime_light_count(nullptr), 0);
   EXPECT_EQ(afterglow_runtime_update(nullptr, nullptr, nullptr), 0);

@@ -13,6 +13,7 @@
 #include "afterglow/bakefiles/images.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/core/status.h"
+#include "afterglow/runtime/probe_lights.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
 #include "afterglow/runtime/reflection_capture.h"
@@ -40,10 +41,16 @@ struct BakedReflections {
 Result<BakedReflections> loadBakedReflections(const std::string& gltfPath);
 
 // The light probes a bake wrote beside its glTF: positions and tetrahedra
-// (probes/light_probes.json) and one radiance SH per position (light_probes_sh.bin).
+// (probes/light_probes.json) and one radiance SH per position (light_probes_sh.bin), with
+// the small sources each probe reads as a direction (probe_lights.h; none in older files).
 struct LightProbes {
   runtime::ProbeTetrahedra mesh;
   std::vector<runtime::ShL2> sh;
+  runtime::ProbeDirectionList directions;
+  float deringWindow = 0.0f;  // how the file's SH were deringed (0: not)
+
+  // The probes' light at p (tetrahedral interpolation from hint, as Runtime::sampleProbes).
+  runtime::ProbeLighting sample(glm::vec3 p, int hint) const;
 };
 Result<LightProbes> loadLightProbes(const std::string& gltfPath);
 
@@ -72,6 +79,10 @@ struct BakedProbes {
   // Runtime::sampleProbes), deringed as the bake's SH file is: at a probe's position, that
   // probe's SH in the file.
   runtime::ShL2 sample(glm::vec3 p, int* hint) const;
+  // The same with the probes' directions (probe_lights.h): E/π is
+  // sampleLighting(p, hint).irradianceOverPi(n, deringWindow).
+  runtime::ProbeLighting sampleLighting(glm::vec3 p, int* hint) const;
+  float window() const { return runtime ? deringWindow : relit.deringWindow; }
 };
 // The bounce passes a bake ran, from its report's settings (0: until converged); an error
 // naming the report when "bounces" is not a count.

@@ -14,6 +14,7 @@
 #include "afterglow/core/atomic_file.h"
 #include "afterglow/core/status.h"
 #include "afterglow/probes/probes_file.h"
+#include "afterglow/runtime/probe_lights.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/transport.h"
 #include "afterglow/scenes/scene.h"
@@ -54,9 +55,10 @@ struct ProbeSet {
 };
 // OUT/probes/light_probes.json (the placement's format, with the SH file named, `settings`'s
 // probe options recorded) and OUT/probes/light_probes_sh.bin (the SH, deringed with `dering`
-// when positive), appending the paths to `written`.
+// when positive, and the probes' directions), appending the paths to `written`.
 Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
-                        const std::vector<runtime::ShL2>& sh, float dering,
+                        const std::vector<runtime::ShL2>& sh,
+                        const runtime::ProbeDirectionList& directions, float dering,
                         const nlohmann::json& settings, AtomicOutput& out,
                         std::vector<std::string>& written);
 

@@ -35,6 +35,7 @@
 
 #include "afterglow/bakefiles/read.h"
 #include "afterglow/core/status.h"
+#include "afterglow/runtime/probe_lights.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
 #include "afterglow/runtime/reflection_capture.h"
@@ -62,8 +63,14 @@ struct ProbeSphere {
   float radius = 0.0f;
   int probe = -1;     // the probe it stands at
   runtime::ShL2 sh;   // the probes' radiance SH interpolated at the centre
+  // ... and their small sources read as directions (probe_lights.h), with the SH's deringing
+  std::vector<runtime::ProbeDirection> directions;
+  float window = 0.0f;
   SphereFinish finish = SphereFinish::Diffuse;
 };
+
+// A sphere of `radius` at `centre` lit by the probes there (probe -1: at no probe in particular).
+ProbeSphere sphereAt(const bakefiles::LightProbes& probes, glm::vec3 centre, float radius);
 
 // Per probe, the distance to the nearest other probe, taken along the tetrahedra's edges (a
 // Delaunay mesh holds every probe's nearest neighbour among its edges), or over all pairs when

@@ -44,6 +44,7 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/runtime/probe_lights.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
 #include "afterglow/runtime/reflection_capture.h"
@@ -207,6 +208,13 @@ class Runtime {
   ShL2 sampleProbes(glm::vec3 position, int* hint = nullptr) const;
   // E/π for a unit normal from a probe's (or an interpolated) radiance SH.
   static glm::vec3 evaluateIrradiance(const ShL2& sh, glm::vec3 normal);
+  // The same point's SH with its small sources kept as directions (probe_lights.h), for E/π
+  // with their clamped cosines exact: beside objects in a room lit by a small lamp, several
+  // times closer to the true irradiance than the SH alone. Lights as the probes were published.
+  ProbeLighting sampleProbeLighting(glm::vec3 position, int* hint = nullptr) const;
+  static glm::vec3 evaluateIrradiance(const ProbeLighting& lighting, glm::vec3 normal);
+  // Every probe's lights as last published (a copy; empty without probes).
+  ProbeDirectionList probeLights() const;
   // Refreshes the probes alone from the current solution (no setting is applied and no bounce
   // runs: call update() with maxBounces < 0 for that), then publishes them. budgetMs > 0
   // refreshes blocks of probes until the budget is spent, carrying on where the previous call
@@ -298,6 +306,7 @@ class Runtime {
   // it into the back buffer and flipping probeFront_ under outputMutex_.
   std::vector<ShL2> probeWork_;
   std::vector<ShL2> probes_[2];
+  ProbeDirectionList probeLights_[2];  // with probes_, from the sources' scales at publishing
   int probeFront_ = 0;
   size_t probeCursor_ = 0;  // where the next budgeted updateProbes() starts
   // Refreshes probes [first, first + count) and returns how many it did.

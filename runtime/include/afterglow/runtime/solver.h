@@ -77,6 +77,8 @@ class Solver {
   // rows gathered), into out[0 .. count). Probes out of range are left out.
   void probeRadiance(size_t first, size_t count, ShL2* out) const;
   size_t probeCount() const { return data_.probes.count(); }
+  // Per source, what its unit transfer is multiplied by now (sourceScale).
+  const std::vector<glm::vec3>& sourceScales() const { return sourceScale_; }
 
   const std::vector<glm::vec3>& clusterReflected() const { return reflected_; }
   const std::vector<glm::vec3>& clusterAlbedo() const { return albedo_; }

@@ -332,6 +332,10 @@ struct TransportData {
   size_t reflectionBytes() const;
 };
 
+// What a source's unit transfer is multiplied by as set now: its colour × intensity (a light)
+// or its material's emission (emissive surfaces); 0 when disabled.
+glm::vec3 sourceScale(const TransportData& data, const Source& source);
+
 // texelGather and pointFilter (smoothing only with filterPasses > 0) from texelPoint,
 // texelNeighbours and the atlases: a texel mixes its own gather point (weight 4) with those of
 // its marked neighbours (2 along the axes, 1 on the diagonals), normalised; a gather point's
