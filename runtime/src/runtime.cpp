@@ -66,6 +66,7 @@ Runtime::Runtime(TransportData data) : data_(std::move(data)) {
     if (data_.probes.count() > 0) {
       probeLights_[b].start.reserve(data_.probes.count() + 1);
       probeLights_[b].lights.reserve(probeLightCapacity(data_));
+      probeLightScales_[b].reserve(data_.sources.size());
     }
   }
   probeWork_.assign(data_.probes.count(), ShL2());
@@ -357,7 +358,14 @@ size_t Runtime::refreshProbes(size_t first, size_t count) {
 void Runtime::publishProbes() {
   const int back = 1 - probeFront_;  // written only here, under updateMutex_
   std::copy(probeWork_.begin(), probeWork_.end(), probes_[back].begin());
-  runtime::probeLights(data_, solver_->sourceScales(), probeLights_[back]);
+  // The directions depend on the sources' scales alone: a budgeted refresh under unchanged
+  // lights (most calls) keeps the buffer's.
+  const std::vector<glm::vec3>& scales = solver_->sourceScales();
+  if (!probeLightsValid_[back] || probeLightScales_[back] != scales) {
+    runtime::probeLights(data_, scales, probeLights_[back]);
+    probeLightScales_[back].assign(scales.begin(), scales.end());
+    probeLightsValid_[back] = true;
+  }
   std::lock_guard<std::mutex> lock(outputMutex_);
   probeFront_ = back;
 }

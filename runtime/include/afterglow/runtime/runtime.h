@@ -307,6 +307,8 @@ class Runtime {
   std::vector<ShL2> probeWork_;
   std::vector<ShL2> probes_[2];
   ProbeDirectionList probeLights_[2];  // with probes_, from the sources' scales at publishing
+  std::vector<glm::vec3> probeLightScales_[2];  // ... which were these
+  bool probeLightsValid_[2] = {false, false};
   int probeFront_ = 0;
   size_t probeCursor_ = 0;  // where the next budgeted updateProbes() starts
   // Refreshes probes [first, first + count) and returns how many it did.
