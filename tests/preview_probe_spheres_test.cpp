@@ -36,6 +36,25 @@ bakefiles::LightProbes cornellProbes(float step) {
   return probes;
 }
 
+// A sphere put at a point (render --sphere-at) is lit by the probes there: at a probe, that
+// probe's SH and its directions.
+TEST(ProbeSpheres, ASphereAtAPointTakesTheProbesThere) {
+  bakefiles::LightProbes probes = cornellProbes(0.1f);
+  const size_t n = probes.mesh.positions.size();
+  probes.directions.start.assign(1, 0);
+  for (size_t p = 0; p < n; ++p) {
+    probes.sh[p].c[1] = glm::vec3(0.01f * float(p));  // tells the probes apart
+    if (p % 2 == 0) probes.directions.lights.push_back({glm::vec3(0, -1, 0), glm::vec3(float(p))});
+    probes.directions.start.push_back(uint32_t(probes.directions.lights.size()));
+  }
+  const size_t at = n / 2 - (n / 2) % 2;  // an even probe: one direction
+  const ProbeSphere s = sphereAt(probes, probes.mesh.positions[at], 0.02f);
+  EXPECT_EQ(s.radius, 0.02f);
+  EXPECT_NEAR(s.sh.c[1].x, probes.sh[at].c[1].x, 1e-5f);
+  ASSERT_EQ(s.directions.size(), 1u);
+  EXPECT_NEAR(s.directions[0].power.x, float(at), 1e-3f);
+}
+
 TEST(ProbeSpheres, MedianSpacingIsTheGridStep) {
   const bakefiles::LightProbes probes = cornellProbes(0.1f);
   EXPECT_NEAR(medianProbeSpacing(probes.mesh), 0.1f, 1e-5f);

@@ -115,6 +115,19 @@ float clearRadius(const trace::RayTracer& tracer, glm::vec3 centre, float radius
   return std::min(radius, kWallGap * nearest);
 }
 
+// A sphere lit by the probes at its centre (their SH and directions, interpolated from hint).
+ProbeSphere litSphere(const bakefiles::LightProbes& probes, glm::vec3 centre, float radius,
+                      int hint) {
+  ProbeSphere s;
+  s.centre = centre;
+  s.radius = radius;
+  runtime::ProbeLighting lighting = probes.sample(centre, hint);
+  s.sh = lighting.sh;
+  s.directions = std::move(lighting.lights);
+  s.window = probes.deringWindow;
+  return s;
+}
+
 // One candidate of a handful: where it lands on the picture and how big it looks.
 struct Candidate {
   int probe;
@@ -276,26 +289,15 @@ Result<std::vector<ProbeSphere>> chooseProbeSpheres(const trace::RayTracer& trac
   std::vector<ProbeSphere> spheres(picked.size());
   parallelFor(picked.size(), [&](size_t i) {
     ProbeSphere& s = spheres[i];
-    s.probe = picked[i].probe;
-    s.centre = probes.mesh.positions[size_t(s.probe)];
-    s.radius = picked[i].radius;
-    runtime::ProbeLighting lighting = probes.sample(s.centre, hint[size_t(s.probe)]);
-    s.sh = lighting.sh;
-    s.directions = std::move(lighting.lights);
-    s.window = probes.deringWindow;
+    const int probe = picked[i].probe;
+    s = litSphere(probes, probes.mesh.positions[size_t(probe)], picked[i].radius, hint[size_t(probe)]);
+    s.probe = probe;
   }, 64);
   return spheres;
 }
 
 ProbeSphere sphereAt(const bakefiles::LightProbes& probes, glm::vec3 centre, float radius) {
-  ProbeSphere s;
-  s.centre = centre;
-  s.radius = radius;
-  runtime::ProbeLighting lighting = probes.sample(centre, 0);
-  s.sh = lighting.sh;
-  s.directions = std::move(lighting.lights);
-  s.window = probes.deringWindow;
-  return s;
+  return litSphere(probes, centre, radius, 0);
 }
 
 ProbeSphereIndex::ProbeSphereIndex(const std::vector<ProbeSphere>& spheres, const trace::View& view,
