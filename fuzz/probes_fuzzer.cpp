@@ -42,7 +42,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (runtime::parseProbeSh(data, size, sh, &error)) {
     const runtime::ProbeDirectionList& d = sh.directions;
     const size_t section = d.start.empty() ? 0 : 4 + d.start.size() * 4 + d.lights.size() * 24;
-    if (size != runtime::kProbeShHeaderSize + sh.sh.size() * 27 * 4 + section) std::abort();
+    if (size != runtime::kProbeShHeaderSize + sh.sh.size() * 27 * 4 + section + sh.depth.size() * 2)
+      std::abort();
+    if (!sh.depth.empty() && sh.depth.size() != sh.sh.size() * runtime::kProbeDepthValues)
+      std::abort();
+    for (uint16_t v : sh.depth)
+      if (!(runtime::halfToFloat(v) >= 0.0f) || !std::isfinite(runtime::halfToFloat(v))) std::abort();
     for (const runtime::ShL2& s : sh.sh)
       for (const glm::vec3& c : s.c)
         if (!afterglow::finite(c)) std::abort();

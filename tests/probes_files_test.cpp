@@ -155,6 +155,21 @@ TEST(ProbesFiles, TheShFileRoundTripsAndRefusesDamage) {
   count[section] = 200;  // M no longer matches the size
   EXPECT_FALSE(runtime::parseProbeSh(count.data(), count.size(), back, &error));
   EXPECT_NE(error.find("bytes"), std::string::npos) << error;
+  // With depth maps (probe_visibility.h) after the directions.
+  file.depth.assign(3 * runtime::kProbeDepthValues, runtime::floatToHalf(1.5f));
+  file.depth[5] = runtime::floatToHalf(0.25f);
+  const std::vector<uint8_t> withDepth = runtime::serializeProbeSh(file);
+  ASSERT_EQ(withDepth.size(), withDirections.size() + 3 * runtime::kProbeDepthValues * 2);
+  ASSERT_TRUE(runtime::parseProbeSh(withDepth.data(), withDepth.size(), back, &error)) << error;
+  EXPECT_EQ(back.depth, file.depth);
+  std::vector<uint8_t> negative = withDepth;
+  const uint16_t minus = runtime::floatToHalf(-1.0f);
+  const size_t probe2 = withDirections.size() + 2 * runtime::kProbeDepthValues * 2;
+  negative[probe2] = uint8_t(minus), negative[probe2 + 1] = uint8_t(minus >> 8);
+  EXPECT_FALSE(runtime::parseProbeSh(negative.data(), negative.size(), back, &error));
+  EXPECT_NE(error.find("probe 2: its depth map"), std::string::npos) << error;
+  file.depth.clear();
+
   std::vector<uint8_t> length = withDirections;
   const float two = 2.0f;
   std::memcpy(length.data() + section + 4 + 4 * 4 + 6 * 4, &two, 4);  // direction 1's x

@@ -32,6 +32,7 @@
 #include "afterglow/runtime/probe_lights.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
+#include "afterglow/runtime/probe_visibility.h"
 #include "afterglow/scenes/units.h"
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/trace/raytracer.h"
@@ -392,14 +393,16 @@ void probesBesideBlocks(const std::string& path, float unitScale, const char* na
   ASSERT_EQ(points.size(), 40u);
 
   const glm::vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  // The probes' lights as the runtime and the bake folder have them (probe_lights.h).
+  // The probes' lights as the runtime and the bake folder have them (probe_lights.h), weighed
+  // by visibility as the runtime weighs them (probe_visibility.h).
   const runtime::ProbeDirectionList directions =
       runtime::probeLights(baked.transport, runtime::sourceScales(baked.transport));
   ASSERT_EQ(directions.count(), placed->positions.size());
   std::vector<glm::vec3> at, normals, probe, withDirections;
   int hint = 0;
   for (const glm::vec3& p : points) {
-    const runtime::ProbeLocation where = runtime::locateProbe(mesh.value(), p, hint);
+    const runtime::ProbeLocation where = runtime::weighByVisibility(
+        runtime::locateProbe(mesh.value(), p, hint), baked.transport.probes, p);
     hint = std::max(where.tetrahedron, 0);
     const runtime::ProbeLighting lighting = runtime::mixProbeLighting(where, baked.probeSh, directions);
     for (const glm::vec3& n : axes) {

@@ -12,6 +12,7 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/probes/probes_file.h"
 #include "afterglow/runtime/probe_sh_file.h"
+#include "afterglow/runtime/probe_visibility.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -180,6 +181,7 @@ Result<LightProbes> readLightProbes(const std::string& dir, const std::string& m
   out.mesh = std::move(file->mesh);
   out.sh = std::move(sh.sh);
   out.directions = std::move(sh.directions);
+  out.depth = std::move(sh.depth);
   out.deringWindow = sh.deringWindow;
   return out;
 }
@@ -226,7 +228,9 @@ Result<baker::Environment> loadBakeEnvironment(const std::string& gltfPath, bool
 }
 
 runtime::ProbeLighting LightProbes::sample(glm::vec3 p, int hint) const {
-  return runtime::mixProbeLighting(runtime::locateProbe(mesh, p, hint), sh, directions);
+  const runtime::ProbeLocation where =
+      runtime::weighByVisibility(runtime::locateProbe(mesh, p, hint), mesh.positions, depth, p);
+  return runtime::mixProbeLighting(where, sh, directions);
 }
 
 const runtime::ProbeTetrahedra& BakedProbes::mesh() const {
@@ -238,7 +242,8 @@ runtime::ShL2 BakedProbes::sample(glm::vec3 p, int* hint) const {
     // The relit SH file is deringed already, and interpolated as the runtime interpolates.
     const runtime::ProbeLocation where = runtime::locateProbe(relit.mesh, p, hint ? *hint : 0);
     if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
-    return runtime::mixProbes(where, relit.sh);
+    return runtime::mixProbes(runtime::weighByVisibility(where, relit.mesh.positions, relit.depth, p),
+                              relit.sh);
   }
   const runtime::ShL2 sh = runtime->sampleProbes(p, hint);
   // Deringing scales each band: interpolating deringed probes is deringing the interpolation.
@@ -249,7 +254,9 @@ runtime::ProbeLighting BakedProbes::sampleLighting(glm::vec3 p, int* hint) const
   if (!runtime) {
     const runtime::ProbeLocation where = runtime::locateProbe(relit.mesh, p, hint ? *hint : 0);
     if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
-    return runtime::mixProbeLighting(where, relit.sh, relit.directions);
+    return runtime::mixProbeLighting(
+        runtime::weighByVisibility(where, relit.mesh.positions, relit.depth, p), relit.sh,
+        relit.directions);
   }
   runtime::ProbeLighting lighting = runtime->sampleProbeLighting(p, hint);
   if (deringWindow > 0.0f) lighting.sh = runtime::deringed(lighting.sh, deringWindow);

@@ -247,6 +247,7 @@ Result<std::optional<RelitLightProbes>> relightProbes(RelitBake& bake) {
       shFile.sh[size_t(i)] = runtime::deringed(shFile.sh[size_t(i)], shFile.deringWindow);
   }
   shFile.directions = rt.probeLights();
+  shFile.depth = rt.data().probes.depth;
   const std::vector<uint8_t> bytes = runtime::serializeProbeSh(shFile);
   return std::optional<RelitLightProbes>(RelitLightProbes{
       doc.dump() + "\n", std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size())});

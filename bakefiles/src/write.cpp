@@ -166,7 +166,8 @@ Result<json> writeLightmaps(const std::vector<runtime::AtlasLayout>& layouts,
 
 Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
                         const std::vector<runtime::ShL2>& sh,
-                        const runtime::ProbeDirectionList& directions, float dering,
+                        const runtime::ProbeDirectionList& directions,
+                        const std::vector<uint16_t>& depth, float dering,
                         const json& bakeSettings, AtomicOutput& out,
                         std::vector<std::string>& written) {
   probes::Placement placement;
@@ -191,6 +192,7 @@ Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
   file.deringWindow = dering;
   file.sh = sh;
   file.directions = directions;
+  file.depth = depth;
   if (dering > 0.0f)
     for (runtime::ShL2& s : file.sh) s = runtime::deringed(s, dering);
   const std::vector<uint8_t> bytes = runtime::serializeProbeSh(file);

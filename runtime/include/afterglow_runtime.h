@@ -120,7 +120,8 @@ int afterglow_runtime_read_texels(const AfterglowRuntime* runtime, float* rgb, s
 int afterglow_runtime_probe_count(const AfterglowRuntime* runtime);
 int afterglow_runtime_probe_position(const AfterglowRuntime* runtime, int probe, float* xyz);
 int afterglow_runtime_probe_sh(const AfterglowRuntime* runtime, int probe, float* sh27);
-/* Tetrahedral interpolation at (x, y, z); *hint (may be NULL) starts the walk and receives the
+/* Tetrahedral interpolation at (x, y, z), weighed by the probes' visibility of the point (no light
+ * through walls); *hint (may be NULL) starts the walk and receives the
  * tetrahedron found. */
 int afterglow_runtime_sample_probes(const AfterglowRuntime* runtime, float x, float y, float z,
                                     int* hint, float* sh27);

@@ -12,6 +12,7 @@ namespace {
 constexpr uint32_t kFloatsPerProbe = 3 * kShCount;
 constexpr uint32_t kDeringed = 1u;
 constexpr uint32_t kDirections = 2u;
+constexpr uint32_t kDepth = 4u;
 constexpr uint32_t kFloatsPerDirection = 6;
 
 void put32(std::vector<uint8_t>& out, size_t at, uint32_t v) {
@@ -39,12 +40,15 @@ std::vector<uint8_t> serializeProbeSh(const ProbeShFile& file) {
   const bool withDirections = !dirs.start.empty() && dirs.count() == file.sh.size();
   size_t size = kProbeShHeaderSize + file.sh.size() * kFloatsPerProbe * 4;
   if (withDirections) size += 4 + dirs.start.size() * 4 + dirs.lights.size() * kFloatsPerDirection * 4;
+  const bool withDepth = !file.depth.empty() && file.depth.size() == file.sh.size() * kProbeDepthValues;
+  if (withDepth) size += file.depth.size() * 2;
   std::vector<uint8_t> out(size, 0);
   std::memcpy(out.data(), kProbeShMagic, 8);
   put32(out, 8, kProbeShVersion);
   put32(out, 12, uint32_t(file.sh.size()));
   put32(out, 16, kFloatsPerProbe);
-  put32(out, 20, (file.deringWindow > 0.0f ? kDeringed : 0u) | (withDirections ? kDirections : 0u));
+  put32(out, 20, (file.deringWindow > 0.0f ? kDeringed : 0u) | (withDirections ? kDirections : 0u) |
+                     (withDepth ? kDepth : 0u));
   putFloat(out, 24, file.deringWindow > 0.0f ? file.deringWindow : 0.0f);
   size_t at = kProbeShHeaderSize;
   for (const ShL2& sh : file.sh)
@@ -58,6 +62,8 @@ std::vector<uint8_t> serializeProbeSh(const ProbeShFile& file) {
       for (float v : {d.direction.x, d.direction.y, d.direction.z, d.power.x, d.power.y, d.power.z})
         putFloat(out, at, v), at += 4;
   }
+  if (withDepth)
+    for (uint16_t v : file.depth) out[at] = uint8_t(v), out[at + 1] = uint8_t(v >> 8), at += 2;
   return out;
 }
 
@@ -80,6 +86,8 @@ bool parseProbeSh(const uint8_t* bytes, size_t size, ProbeShFile& out, std::stri
     return fail(std::to_string(floats) + " floats per probe, expected " +
                 std::to_string(kFloatsPerProbe));
   const bool withDirections = (flags & kDirections) != 0;
+  const bool withDepth = (flags & kDepth) != 0;
+  const uint64_t depthBytes = withDepth ? uint64_t(count) * kProbeDepthValues * 2 : 0;
   const uint64_t shEnd = uint64_t(kProbeShHeaderSize) + uint64_t(count) * kFloatsPerProbe * 4;
   // Version 1 has no directions; the sizes are checked before any count read is trusted.
   uint64_t expected = shEnd;
@@ -91,11 +99,12 @@ bool parseProbeSh(const uint8_t* bytes, size_t size, ProbeShFile& out, std::stri
     directionCount = get32(bytes + shEnd);
     expected = shEnd + 4 + (uint64_t(count) + 1) * 4 + uint64_t(directionCount) * kFloatsPerDirection * 4;
   }
+  expected += depthBytes;
   if (uint64_t(size) != expected)
     return fail(std::to_string(size) + " bytes, " + std::to_string(count) + " probes need " +
                 std::to_string(expected));
   const float window = getFloat(bytes + 24);
-  const uint32_t known = kDeringed | (version >= 2 ? kDirections : 0u);
+  const uint32_t known = kDeringed | (version >= 2 ? kDirections | kDepth : 0u);
   if ((flags & ~known) != 0 || !std::isfinite(window) || window < 0.0f ||
       ((flags & kDeringed) != 0) != (window > 0.0f))
     return fail("bad flags or deringing window");
@@ -135,6 +144,16 @@ bool parseProbeSh(const uint8_t* bytes, size_t size, ProbeShFile& out, std::stri
       for (float x : v) finite = finite && std::isfinite(x);
       if (!finite || std::abs(glm::length(d.direction) - 1.0f) > 1e-3f)
         return fail("direction " + std::to_string(k) + " is not a finite unit vector and power");
+    }
+  }
+  if (withDepth) {
+    file.depth.resize(size_t(count) * kProbeDepthValues);
+    for (size_t k = 0; k < file.depth.size(); ++k, p += 2) {
+      file.depth[k] = uint16_t(p[0] | p[1] << 8);
+      const float v = halfToFloat(file.depth[k]);
+      if (!std::isfinite(v) || v < 0.0f)
+        return fail("probe " + std::to_string(k / kProbeDepthValues) +
+                    ": its depth map holds a negative or non-finite distance");
     }
   }
   out = std::move(file);

@@ -7,6 +7,7 @@
 
 #include "afterglow/core/math.h"
 #include "afterglow/core/timer.h"
+#include "afterglow/runtime/probe_visibility.h"
 #include "afterglow/runtime/reflection_prefilter.h"
 #include "afterglow/runtime/transport_file.h"
 
@@ -417,8 +418,9 @@ ShL2 Runtime::sampleProbes(glm::vec3 position, int* hint) const {
   if (probeCount() == 0) return ShL2();
   const ProbeLocation where = locateProbe(data_.probes.mesh, position, hint ? *hint : 0);
   if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
+  const ProbeLocation seen = weighByVisibility(where, data_.probes, position);
   std::lock_guard<std::mutex> lock(outputMutex_);
-  return mixProbes(where, probes_[probeFront_]);
+  return mixProbes(seen, probes_[probeFront_]);
 }
 
 glm::vec3 Runtime::evaluateIrradiance(const ShL2& sh, glm::vec3 normal) {
@@ -429,8 +431,9 @@ ProbeLighting Runtime::sampleProbeLighting(glm::vec3 position, int* hint) const 
   if (probeCount() == 0) return ProbeLighting();
   const ProbeLocation where = locateProbe(data_.probes.mesh, position, hint ? *hint : 0);
   if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
+  const ProbeLocation seen = weighByVisibility(where, data_.probes, position);
   std::lock_guard<std::mutex> lock(outputMutex_);
-  return mixProbeLighting(where, probes_[probeFront_], probeLights_[probeFront_]);
+  return mixProbeLighting(seen, probes_[probeFront_], probeLights_[probeFront_]);
 }
 
 glm::vec3 Runtime::evaluateIrradiance(const ProbeLighting& lighting, glm::vec3 normal) {

@@ -234,7 +234,7 @@ size_t TransportData::probeBytes() const {
   const ProbeTransport& p = probes;
   size_t b = bytesOf(p.mesh.positions) + bytesOf(p.mesh.tetrahedra) + bytesOf(p.mesh.neighbours) +
              bytesOf(p.binSh) + bytesOf(p.links.rowStart) + bytesOf(p.links.link) +
-             bytesOf(p.links.rowScale) + bytesOf(p.sky);
+             bytesOf(p.links.rowScale) + bytesOf(p.sky) + bytesOf(p.depth);
   for (const Source& s : sources) b += bytesOf(s.probeTransfer);
   return b;
 }
@@ -321,7 +321,10 @@ std::string TransportData::validate() const {
       return "probes: region SH size does not match the regions";
     if (probes.sky.size() != probeCount * kProbeSkyCount)
       return "probes: sky transfer size does not match the probes";
+    if (!probes.depth.empty() && probes.depth.size() != probeCount * 2 * 64)
+      return "probes: depth maps' size does not match the probes";
   } else if (!probes.binSh.empty() || !probes.sky.empty() || probes.links.rows() != 0 ||
+             !probes.depth.empty() ||
              !probes.mesh.tetrahedra.empty()) {
     return "probes: transfer without probes";
   }

@@ -232,6 +232,7 @@ const SectionWriter kWriters[] = {
        o.array(p.binSh);
        o.links(p.links);
        o.array(p.sky);
+       o.array(p.depth);
      }},
     {kReflections, 0,
      [](const TransportData& d, Out& o) {
@@ -450,7 +451,8 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
         !in.array(p.mesh.tetrahedra, "tetrahedra") || !in.array(p.mesh.neighbours, "neighbours") ||
         !in.array(p.binSh, "region SH") || !in.scalar(p.links.targetBits, "target bits") ||
         !in.rowStart(p.links.rowStart, "row offsets") || !in.array(p.links.link, "links") ||
-        !in.array(p.links.rowScale, "row scales") || !in.array(p.sky, "probe sky transfer"))
+        !in.array(p.links.rowScale, "row scales") || !in.array(p.sky, "probe sky transfer") ||
+        !in.array(p.depth, "probe depth maps"))
       return false;
     if (count != p.count())
       return in.fail("the table says " + std::to_string(count) + " probes, the section has " +

@@ -169,6 +169,7 @@ TransportData makeTransport(const Shape& s, uint64_t seed = 1) {
       p.links.appendRow(targets.data(), weights.data(), targets.size());
     }
     for (uint32_t k = 0; k < 4 * kProbeSkyCount; ++k) p.sky.push_back(floatToHalf(rng.unit() - 0.5f));
+    for (uint32_t k = 0; k < 4 * 128; ++k) p.depth.push_back(floatToHalf(4.0f * rng.unit()));
   }
 
   if (s.reflections) {
@@ -293,6 +294,7 @@ void expectEqual(const TransportData& a, const TransportData& b) {
   EXPECT_EQ(p.links.link, q.links.link);
   EXPECT_EQ(p.links.rowScale, q.links.rowScale);
   EXPECT_EQ(p.sky, q.sky);
+  EXPECT_EQ(p.depth, q.depth);
   const ReflectionTransport &r = a.reflections, &t = b.reflections;
   EXPECT_EQ(r.bounces, t.bounces);
   EXPECT_EQ(r.bakedAlbedo, t.bakedAlbedo);
@@ -435,12 +437,12 @@ TEST(TransportFile, TransportDataHasNoFieldTheFileMisses) {
   // The sizes with libstdc++ on 64-bit when this file format was written. A failure means a
   // field was added: serialise it (transport_file.cpp) and compare it in expectEqual() above.
 #if defined(__GLIBCXX__) && UINTPTR_MAX == 0xffffffffffffffffull
-  EXPECT_EQ(sizeof(TransportData), 1120u);
+  EXPECT_EQ(sizeof(TransportData), 1144u);
   EXPECT_EQ(sizeof(ReflectionTransport), 80u);
   EXPECT_EQ(sizeof(ReflectionProbeCapture), 152u);
   EXPECT_EQ(sizeof(AtlasLayout), 128u);
   EXPECT_EQ(sizeof(Source), 136u);
-  EXPECT_EQ(sizeof(ProbeTransport), 208u);
+  EXPECT_EQ(sizeof(ProbeTransport), 232u);
   EXPECT_EQ(sizeof(MaterialParams), 56u);
 #else
   GTEST_SKIP() << "sizes recorded for libstdc++ on 64-bit only";

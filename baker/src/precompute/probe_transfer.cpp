@@ -24,6 +24,7 @@
 #include "afterglow/core/stages.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/runtime/probe_sh.h"
+#include "afterglow/runtime/probe_visibility.h"
 #include "shading/emitters.h"
 #include "precompute/far_targets.h"
 #include "precompute/gather_batch.h"
@@ -44,6 +45,7 @@ struct ProbeResult {
   runtime::SparseLinks rows;  // per region, its links (encoded in the worker: the join copies)
   double blocked[runtime::kProbeSkyCount] = {};  // I − K: the sky the hits block
   std::vector<double> source;                    // sources × kShCount
+  uint16_t depth[runtime::kProbeDepthValues] = {};  // the rays' distances (probe_visibility.h)
 };
 
 // A probe's shadow rays toward its sources, traced together: per ray its source and the weight
@@ -82,7 +84,8 @@ class ProbeTracer {
       : scene_(scene), tracer_(tracer), texels_(texels), clusters_(clusters), far_(far),
         targetCount_(targetCount), options_(options), dirs_(directions), positions_(positions),
         emitters_(collectEmitters(scene)),
-        rayDensity_(double(directions.rays) / (4.0 * double(kPi))) {}
+        rayDensity_(double(directions.rays) / (4.0 * double(kPi))),
+        depthFilter_(runtime::probeDepthFilter(directions.direction.data(), directions.rays)) {}
 
   // Matches the transport's sources to the scene's lights (in order) and emitters (by
   // material), as computeDirect made them.
@@ -124,6 +127,19 @@ class ProbeTracer {
   void readRays(const GatherBatch& batch, size_t base, size_t stride, ProbeResult& res,
                 std::vector<uint32_t>& targets, std::vector<float>& weights) const {
     uint32_t hits = 0;
+    // Every ray's distance for the depth map (a miss far; glass counts where the ray stopped).
+    float distance[1024];
+    std::vector<float> moreDistances;
+    float* distances = distance;
+    if (dirs_.rays > 1024) {
+      moreDistances.resize(dirs_.rays);
+      distances = moreDistances.data();
+    }
+    for (uint32_t r = 0; r < dirs_.rays; ++r) {
+      const trace::Hit& hit = batch.hits()[base + r * stride];
+      distances[r] = hit.valid() ? hit.t : runtime::kProbeDepthFar;
+    }
+    runtime::probeDepthMoments(depthFilter_, distances, res.depth);
     // Region by region (the directions are in region order): its rays' targets, sorted, then
     // counted into the region's row; a hit weighs 1 / (the region's rays) in the region's mean.
     res.rows = runtime::SparseLinks(targetCount_);
@@ -311,6 +327,7 @@ class ProbeTracer {
   const std::vector<glm::vec3>& positions_;
   const std::vector<Emitter> emitters_;
   const double rayDensity_;  // rays × their solid-angle pdf, rays / 4π
+  const runtime::ProbeDepthFilter depthFilter_;  // the rays to the depth map's texels
   std::vector<const scenes::Light*> lights_;  // per source: its light, or null
   std::vector<const Emitter*> emitterOf_;     // per source: its emitter, or null
   std::vector<int> sourceOfMaterial_;         // per material: its emissive source, or -1
@@ -405,6 +422,7 @@ Status computeProbeTransfer(const scenes::Scene& scene, const trace::RayTracer& 
   out.links.rowStart.reserve(count * dirs.regions + 1);
   out.links.rowScale.reserve(count * dirs.regions);
   out.sky.assign(count * runtime::kProbeSkyCount, 0);
+  out.depth.resize(count * runtime::kProbeDepthValues);
   for (runtime::Source& s : transport.sources) s.probeTransfer.assign(count * kShCount, 0.0f);
   for (size_t p = 0; p < count; ++p) {
     ProbeResult& res = results[p];
@@ -414,6 +432,8 @@ Status computeProbeTransfer(const scenes::Scene& scene, const trace::RayTracer& 
     for (size_t row = 1; row < res.rows.rowStart.size(); ++row)
       out.links.rowStart.push_back(at + res.rows.rowStart[row]);
     res.rows = runtime::SparseLinks();
+    std::copy(res.depth, res.depth + runtime::kProbeDepthValues,
+              out.depth.begin() + std::ptrdiff_t(p * runtime::kProbeDepthValues));
     for (int i = 0; i < kShCount; ++i)
       for (int j = i; j < kShCount; ++j) {
         const int k = runtime::probeSkyIndex(i, j);

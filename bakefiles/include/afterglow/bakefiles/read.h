@@ -47,9 +47,11 @@ struct LightProbes {
   runtime::ProbeTetrahedra mesh;
   std::vector<runtime::ShL2> sh;
   runtime::ProbeDirectionList directions;
-  float deringWindow = 0.0f;  // how the file's SH were deringed (0: not)
+  std::vector<uint16_t> depth;  // the probes' depth maps (probe_visibility.h; none in older files)
+  float deringWindow = 0.0f;    // how the file's SH were deringed (0: not)
 
-  // The probes' light at p (tetrahedral interpolation from hint, as Runtime::sampleProbes).
+  // The probes' light at p (tetrahedral interpolation from hint weighed by the probes'
+  // visibility, as Runtime::sampleProbeLighting).
   runtime::ProbeLighting sample(glm::vec3 p, int hint) const;
 };
 Result<LightProbes> loadLightProbes(const std::string& gltfPath);

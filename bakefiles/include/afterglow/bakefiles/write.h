@@ -55,10 +55,11 @@ struct ProbeSet {
 };
 // OUT/probes/light_probes.json (the placement's format, with the SH file named, `settings`'s
 // probe options recorded) and OUT/probes/light_probes_sh.bin (the SH, deringed with `dering`
-// when positive, and the probes' directions), appending the paths to `written`.
+// when positive, the probes' directions and depth maps), appending the paths to `written`.
 Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
                         const std::vector<runtime::ShL2>& sh,
-                        const runtime::ProbeDirectionList& directions, float dering,
+                        const runtime::ProbeDirectionList& directions,
+                        const std::vector<uint16_t>& depth, float dering,
                         const nlohmann::json& settings, AtomicOutput& out,
                         std::vector<std::string>& written);
 

@@ -6,7 +6,8 @@
 //   12  u32      probe count N (the order of "positions" in light_probes.json)
 //   16  u32      floats per probe, 27
 //   20  u32      flags: bit 0 set when the SH were deringed (then 24 holds the window);
-//                       bit 1 set when the probes' directions follow the SH
+//                       bit 1 set when the probes' directions follow the SH;
+//                       bit 2 set when the probes' depth maps follow (after the directions)
 //   24  f32      deringing window (deringed(), probe_sh.h; 0 when not deringed)
 //   28  u32      0 (reserved)
 //   32  f32[N × 27]  per probe, its radiance SH L2 (ShL2: L_i = ∫ L(ω) Y_i(ω) dω in the basis
@@ -16,6 +17,8 @@
 //       u32      M, the directions of all probes
 //       u32[N+1] start: probe p's are directions start[p] .. start[p + 1]
 //       f32[M × 6]  per direction: its unit direction x y z, then its power r g b
+// With bit 2, the probes' depth maps (probe_visibility.h: weigh interpolation by them):
+//       u16[N × 128]  per probe, 64 texels × (mean distance, deviation) as half floats
 //
 // E/π for a normal n is irradianceOverPi(sh, n) (plus the directions' corrections: the
 // ProbeLighting of probe_lights.h); toUnitySH and toShaderConstants convert the SH.
@@ -27,6 +30,7 @@
 
 #include "afterglow/runtime/probe_lights.h"
 #include "afterglow/runtime/probe_sh.h"
+#include "afterglow/runtime/probe_visibility.h"
 
 namespace afterglow::runtime {
 
@@ -38,6 +42,7 @@ struct ProbeShFile {
   std::vector<ShL2> sh;
   float deringWindow = 0.0f;  // > 0 when the SH were deringed with this window
   ProbeDirectionList directions;  // empty, or one list per probe
+  std::vector<uint16_t> depth;    // empty, or N × kProbeDepthValues (probe_visibility.h)
 };
 
 // The file's bytes.

@@ -204,7 +204,8 @@ class Runtime {
   // The probes' SH at any point: tetrahedral interpolation (barycentric weights of the
   // tetrahedron holding it, found by walking from *hint, which receives the tetrahedron found:
   // keep one hint per moving object), and outside the probes' hull the nearest hull face's
-  // (locateProbe). All zero without probes.
+  // (locateProbe), the weights then multiplied by each probe's visibility of the point
+  // (probe_visibility.h: no light through walls) and renormalised. All zero without probes.
   ShL2 sampleProbes(glm::vec3 position, int* hint = nullptr) const;
   // E/π for a unit normal from a probe's (or an interpolated) radiance SH.
   static glm::vec3 evaluateIrradiance(const ShL2& sh, glm::vec3 normal);

@@ -230,6 +230,9 @@ struct ProbeTransport {
   SparseLinks links;           // rows: probe × bins + region; targets as TransportData::links
                                //   (clusters and far clusters, no shared far fields)
   std::vector<uint16_t> sky;   // probes × kProbeSkyCount half floats: K_p's upper triangle
+  // Per probe, the distances its rays hit (probe_visibility.h: 2 × 64 half floats), which keep
+  // interpolation from carrying light through walls; empty: probes weighed as located.
+  std::vector<uint16_t> depth;
 
   size_t count() const { return mesh.positions.size(); }
 };

@@ -55,7 +55,8 @@
 //         arrays vec3 positions, ivec4 tetrahedra, ivec4 neighbours, f32 binSh (bins × 9),
 //         then the links as LINK (u32 targetBits, arrays rowStart, link, rowScale; a row per
 //         probe and region, targets are clusters and far clusters), array u16 sky (probes ×
-//         45 half floats: the sky transfer's upper triangle). See runtime::ProbeTransport.
+//         45 half floats: the sky transfer's upper triangle), array u16 depth (empty, or
+//         probes × 128 half floats: probe_visibility.h). See runtime::ProbeTransport.
 //   REFL  count = reflection probes (0 when the bake had none): u32 bounces, array vec3
 //         bakedAlbedo (per material, or empty), then per probe: string name, u32 resolution,
 //         u64 firstHit, vec3 centre, 3 × vec3 axes (columns), vec3 halfSize, f32
@@ -85,8 +86,8 @@
 namespace afterglow::runtime {
 
 // 2: 4-byte links, far clusters, gather map source; 3: shared far fields; 4: link rows padded
-// to fours
-constexpr uint32_t kTransportVersion = 6;
+// to fours; 6: reflection probes; 7: the light probes' depth maps
+constexpr uint32_t kTransportVersion = 7;
 constexpr char kTransportMagic[8] = {'A', 'G', 'L', 'O', 'W', 'T', 'R', '\0'};
 constexpr uint32_t kTransportHeaderSize = 40;
 
