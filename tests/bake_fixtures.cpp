@@ -102,17 +102,29 @@ scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColo
   return scene;
 }
 
+void addQuad(scenes::Primitive& p, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 n) {
+  const uint32_t base = uint32_t(p.positions.size());
+  for (glm::vec3 v : {a, b, c, d}) {
+    p.positions.push_back(v);
+    p.normals.push_back(n);
+  }
+  for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) p.indices.push_back(base + i);
+}
+
+void addRoomWalls(scenes::Primitive& p, float half, float height) {
+  const float s = half, h = height;
+  addQuad(p, {-s, 0, -s}, {-s, h, -s}, {-s, h, s}, {-s, 0, s}, {1, 0, 0});
+  addQuad(p, {s, 0, s}, {s, h, s}, {s, h, -s}, {s, 0, -s}, {-1, 0, 0});
+  addQuad(p, {-s, 0, -s}, {s, 0, -s}, {s, h, -s}, {-s, h, -s}, {0, 0, 1});
+  addQuad(p, {s, 0, s}, {-s, 0, s}, {-s, h, s}, {s, h, s}, {0, 0, -1});
+}
+
 scenes::Primitive box(glm::vec3 lo, glm::vec3 hi, int material) {
   scenes::Primitive p;
   p.material = material;
+  // Faces counter-clockwise seen from outside.
   auto face = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 n) {
-    const uint32_t base = uint32_t(p.positions.size());
-    for (glm::vec3 v : {a, b, c, d}) {
-      p.positions.push_back(v);
-      p.normals.push_back(n);
-    }
-    // a b c d counter-clockwise seen from outside.
-    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) p.indices.push_back(base + i);
+    addQuad(p, a, b, c, d, n);
   };
   const glm::vec3 l = lo, h = hi;
   face({h.x, l.y, h.z}, {h.x, l.y, l.z}, {h.x, h.y, l.z}, {h.x, h.y, h.z}, {1, 0, 0});

@@ -30,6 +30,10 @@ ReferenceTexels referenceOrDie(const scenes::Scene& scene, const TexelSet& texel
 // metallic 0: glTF's default is a metal) with this base colour and specularFactor.
 scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColor,
                          float specularFactor = 1.0f);
+// Appends the quad a b c d (counter-clockwise seen from the side it faces) with normal n.
+void addQuad(scenes::Primitive& p, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 n);
+// The four walls of a room over the floor |x|, |z| <= half, `height` high, facing in.
+void addRoomWalls(scenes::Primitive& p, float half, float height);
 // An axis-aligned closed box from lo to hi, outward normals, one primitive of `material`.
 scenes::Primitive box(glm::vec3 lo, glm::vec3 hi, int material);
 // Adds such a box to `scene` as a mesh and a static instance, both called `name`.

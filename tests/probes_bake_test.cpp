@@ -114,18 +114,10 @@ scenes::Scene roomUnderTheSky(bool window) {
   scenes::Primitive& p = scene.meshes[0].primitives[0];
   // A quad a b c d, counter-clockwise seen from the room, facing n.
   auto quad = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 n) {
-    const uint32_t base = uint32_t(p.positions.size());
-    for (glm::vec3 v : {a, b, c, d}) {
-      p.positions.push_back(v);
-      p.normals.push_back(n);
-    }
-    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) p.indices.push_back(base + i);
+    addQuad(p, a, b, c, d, n);
   };
   const float h = 3.0f;
-  quad({-2, 0, -2}, {-2, h, -2}, {-2, h, 2}, {-2, 0, 2}, {1, 0, 0});
-  quad({2, 0, 2}, {2, h, 2}, {2, h, -2}, {2, 0, -2}, {-1, 0, 0});
-  quad({-2, 0, -2}, {2, 0, -2}, {2, h, -2}, {-2, h, -2}, {0, 0, 1});
-  quad({2, 0, 2}, {-2, 0, 2}, {-2, h, 2}, {2, h, 2}, {0, 0, -1});
+  addRoomWalls(p, 2.0f, h);
   // The ceiling facing down, whole or as four slabs around the window |x|, |z| < 0.5.
   auto ceiling = [&](float x0, float x1, float z0, float z1) {
     quad({x0, h, z0}, {x1, h, z0}, {x1, h, z1}, {x0, h, z1}, {0, -1, 0});

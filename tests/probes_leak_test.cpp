@@ -26,20 +26,9 @@ namespace {
 scenes::Scene twoRooms() {
   scenes::Scene scene = groundQuad("rooms", 2.0f, 0.6f, 0.0f);  // the floor, facing up
   scenes::Primitive& p = scene.meshes[0].primitives[0];
-  auto quad = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 n) {
-    const uint32_t base = uint32_t(p.positions.size());
-    for (glm::vec3 v : {a, b, c, d}) {
-      p.positions.push_back(v);
-      p.normals.push_back(n);
-    }
-    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) p.indices.push_back(base + i);
-  };
   const float h = 3.0f;
-  quad({-2, 0, -2}, {-2, h, -2}, {-2, h, 2}, {-2, 0, 2}, {1, 0, 0});
-  quad({2, 0, 2}, {2, h, 2}, {2, h, -2}, {2, 0, -2}, {-1, 0, 0});
-  quad({-2, 0, -2}, {2, 0, -2}, {2, h, -2}, {-2, h, -2}, {0, 0, 1});
-  quad({2, 0, 2}, {-2, 0, 2}, {-2, h, 2}, {2, h, 2}, {0, 0, -1});
-  quad({-2, h, -2}, {2, h, -2}, {2, h, 2}, {-2, h, 2}, {0, -1, 0});
+  addRoomWalls(p, 2.0f, h);
+  addQuad(p, {-2, h, -2}, {2, h, -2}, {2, h, 2}, {-2, h, 2}, {0, -1, 0});  // the ceiling
   addBox(scene, "wall", {-0.05f, 0.0f, -2.0f}, {0.05f, h, 2.0f}, 0);
   scenes::Light lamp;
   lamp.name = "lamp";

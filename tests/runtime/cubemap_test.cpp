@@ -14,13 +14,6 @@ namespace {
 
 constexpr double kPiD = 3.14159265358979323846;
 
-glm::vec3 randomDirection(test::Rng& rng) {
-  const float z = 1.0f - 2.0f * rng.unit();
-  const float phi = 2.0f * float(kPiD) * rng.unit();
-  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-  return {r * std::cos(phi), r * std::sin(phi), z};
-}
-
 float angleBetween(glm::vec3 a, glm::vec3 b) {
   return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b));
 }

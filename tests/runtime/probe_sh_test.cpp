@@ -15,12 +15,6 @@ namespace afterglow::runtime {
 namespace {
 
 
-glm::vec3 randomDirection(test::Rng& rng) {
-  const float z = 1.0f - 2.0f * rng.unit();
-  const float phi = 2.0f * kPi * rng.unit();
-  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-  return {r * std::cos(phi), r * std::sin(phi), z};
-}
 
 // A unit vector perpendicular to d.
 glm::vec3 perpendicular(glm::vec3 d) {

@@ -13,12 +13,6 @@
 namespace afterglow::runtime {
 namespace {
 
-glm::vec3 randomDirection(test::Rng& rng) {
-  const float z = 1.0f - 2.0f * rng.unit();
-  const float phi = 2.0f * kPi * rng.unit();
-  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-  return {r * std::cos(phi), r * std::sin(phi), z};
-}
 
 // 4,096 directions spread over the sphere (a Fibonacci spiral) as a probe's rays.
 std::vector<glm::vec3> rays(size_t n) {

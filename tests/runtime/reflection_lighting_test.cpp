@@ -18,7 +18,8 @@ namespace {
 
 using test::Rng;
 
-glm::vec3 randomDirection(Rng& rng) {
+// A uniform direction: a point uniform in the ball (by rejection), normalised.
+glm::vec3 directionInBall(Rng& rng) {
   for (;;) {
     const glm::vec3 d(2.0f * rng.unit() - 1.0f, 2.0f * rng.unit() - 1.0f, 2.0f * rng.unit() - 1.0f);
     const float len = glm::length(d);
@@ -53,8 +54,8 @@ TEST(ReflectionLighting, ATapReadsWhatTheTrilinearLookupReads) {
     ReflectionLookup lookup;
     lookup.probe = 0;
     lookup.weight = 0.25f + rng.unit();
-    lookup.reflected = randomDirection(rng);
-    lookup.normal = randomDirection(rng);
+    lookup.reflected = directionInBall(rng);
+    lookup.normal = directionInBall(rng);
     // Mirrors, both ends and every mip in between.
     const float r = i % 7 == 0 ? 0.0f : i % 7 == 1 ? 1.0f : rng.unit();
     const ReflectionTap tap = reflectionTap(lookup, r, chain[0].size, int(chain.size()));
@@ -75,7 +76,7 @@ TEST(ReflectionLighting, TabulatedIrradianceIsTheShs) {
   // where a relative figure means nothing.
   double mean = 0.0, worst = 0.0;
   std::vector<glm::vec3> dirs;
-  for (int i = 0; i < 4000; ++i) dirs.push_back(randomDirection(rng));
+  for (int i = 0; i < 4000; ++i) dirs.push_back(directionInBall(rng));
   for (const glm::vec3& d : dirs) mean += double(irradianceOverPi(sh, d).x);
   mean /= double(dirs.size());
   for (const glm::vec3& d : dirs) {

@@ -2,7 +2,13 @@
 // on every standard library, unlike <random>'s distributions.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+
+#include <glm/glm.hpp>
+
+#include "afterglow/core/math.h"
 
 namespace afterglow::runtime::test {
 
@@ -15,5 +21,13 @@ struct Rng {
   uint32_t below(uint32_t n) { return n ? next() % n : 0; }
   float unit() { return float(next() >> 8) / float(1u << 23); }
 };
+
+// A direction uniform over the unit sphere (z uniform, φ uniform).
+inline glm::vec3 randomDirection(Rng& rng) {
+  const float z = 1.0f - 2.0f * rng.unit();
+  const float phi = 2.0f * kPi * rng.unit();
+  const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
 
 }  // namespace afterglow::runtime::test
