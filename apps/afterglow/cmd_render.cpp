@@ -243,12 +243,6 @@ int runRender(int argc, char** argv, int first) {
     } else if (!args.getInt("probe-spheres", 8, 1, 100000, &sphereCount)) {
       return command.usage(args.error() + " (or 'all')");
     }
-    if (args.has("reference"))
-      return command.usage("--probe-spheres draws into the baked view; the --reference path "
-                           "tracer has no probes");
-    if (isBuiltinScene(input))
-      return command.usage("--probe-spheres reads the light probes afterglow bake wrote beside "
-                           "the scene; render the scene.gltf it wrote, not " + input);
   }
   // Spheres at given points (x, y, z, radius).
   std::vector<glm::vec4> sphereAt;
@@ -258,12 +252,14 @@ int runRender(int argc, char** argv, int first) {
       return command.usage("--sphere-at wants x,y,z,radius (metres, radius > 0), got '" + a + "'");
     sphereAt.emplace_back(v[0], v[1], v[2], v[3]);
   }
-  if (!sphereAt.empty()) {
+  // Spheres of either kind are lit by the probes the bake wrote beside the glTF.
+  if (sphereCount >= 0 || !sphereAt.empty()) {
+    const std::string option = sphereCount >= 0 ? "--probe-spheres" : "--sphere-at";
     if (args.has("reference"))
-      return command.usage("--sphere-at draws into the baked view; the --reference path tracer "
+      return command.usage(option + " draws into the baked view; the --reference path tracer "
                            "has no probes");
     if (isBuiltinScene(input))
-      return command.usage("--sphere-at reads the light probes afterglow bake wrote beside the "
+      return command.usage(option + " reads the light probes afterglow bake wrote beside the "
                            "scene; render the scene.gltf it wrote, not " + input);
   }
   glm::vec3 from(0.0f), at(0.0f);

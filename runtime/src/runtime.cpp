@@ -414,11 +414,15 @@ bool Runtime::probeSh(int probe, ShL2* sh) const {
   return true;
 }
 
-ShL2 Runtime::sampleProbes(glm::vec3 position, int* hint) const {
-  if (probeCount() == 0) return ShL2();
+ProbeLocation Runtime::locateSeen(glm::vec3 position, int* hint) const {
   const ProbeLocation where = locateProbe(data_.probes.mesh, position, hint ? *hint : 0);
   if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
-  const ProbeLocation seen = weighByVisibility(where, data_.probes, position);
+  return weighByVisibility(where, data_.probes, position);
+}
+
+ShL2 Runtime::sampleProbes(glm::vec3 position, int* hint) const {
+  if (probeCount() == 0) return ShL2();
+  const ProbeLocation seen = locateSeen(position, hint);
   std::lock_guard<std::mutex> lock(outputMutex_);
   return mixProbes(seen, probes_[probeFront_]);
 }
@@ -429,9 +433,7 @@ glm::vec3 Runtime::evaluateIrradiance(const ShL2& sh, glm::vec3 normal) {
 
 ProbeLighting Runtime::sampleProbeLighting(glm::vec3 position, int* hint) const {
   if (probeCount() == 0) return ProbeLighting();
-  const ProbeLocation where = locateProbe(data_.probes.mesh, position, hint ? *hint : 0);
-  if (hint && where.tetrahedron >= 0) *hint = where.tetrahedron;
-  const ProbeLocation seen = weighByVisibility(where, data_.probes, position);
+  const ProbeLocation seen = locateSeen(position, hint);
   std::lock_guard<std::mutex> lock(outputMutex_);
   return mixProbeLighting(seen, probes_[probeFront_], probeLights_[probeFront_]);
 }

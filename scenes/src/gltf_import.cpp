@@ -1032,24 +1032,10 @@ class Importer {
         }
       }
     }
-    auto spec = src.extensions.find("KHR_materials_specular");
-    if (spec == src.extensions.end()) return Status::ok();
-    const tinygltf::Value& ext = spec->second;
-    if (!ext.IsObject()) {
-      warn(where + ": KHR_materials_specular is not an object, ignored");
-      return Status::ok();
-    }
-    if (const tinygltf::Value* v = member(ext, "specularFactor")) {
-      const double x = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
-      if (!std::isfinite(x)) {
-        warn(where + ": KHR_materials_specular specularFactor is not a number, 1 used");
-      } else {
-        m.specularFactor = narrow(std::clamp(x, 0.0, 1.0));
-        if (x < 0.0 || x > 1.0)
-          warn(format("%s: KHR_materials_specular specularFactor %g is outside [0, 1], %g used",
-                      where.c_str(), x, double(m.specularFactor)));
-      }
-    }
+    const tinygltf::Value* found = extensionObject(src, "KHR_materials_specular", where);
+    if (!found) return Status::ok();
+    const tinygltf::Value& ext = *found;
+    unitFactor(ext, "KHR_materials_specular", "specularFactor", where, "1", m.specularFactor);
     if (const tinygltf::Value* v = member(ext, "specularColorFactor")) {
       bool numbers = v->IsArray() && v->ArrayLen() == 3;
       for (int k = 0; numbers && k < 3; ++k)
@@ -1080,26 +1066,42 @@ class Importer {
   // transmission). A factor outside [0, 1] is clamped into it with a warning.
   Status importTransmission(const tinygltf::Material& src, const std::string& where,
                             Material& m) {
-    auto found = src.extensions.find("KHR_materials_transmission");
-    if (found == src.extensions.end()) return Status::ok();
-    const tinygltf::Value& ext = found->second;
-    if (!ext.IsObject()) {
-      warn(where + ": KHR_materials_transmission is not an object, ignored");
-      return Status::ok();
-    }
-    if (const tinygltf::Value* v = member(ext, "transmissionFactor")) {
-      const double x = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
-      if (!std::isfinite(x)) {
-        warn(where + ": KHR_materials_transmission transmissionFactor is not a number, 0 used");
-      } else {
-        m.transmissionFactor = narrow(std::clamp(x, 0.0, 1.0));
-        if (x < 0.0 || x > 1.0)
-          warn(format("%s: KHR_materials_transmission transmissionFactor %g is outside [0, 1], "
-                      "%g used", where.c_str(), x, double(m.transmissionFactor)));
-      }
-    }
-    return extensionTexture(ext, "transmissionTexture", where + " KHR_materials_transmission",
+    const tinygltf::Value* ext = extensionObject(src, "KHR_materials_transmission", where);
+    if (!ext) return Status::ok();
+    unitFactor(*ext, "KHR_materials_transmission", "transmissionFactor", where, "0",
+               m.transmissionFactor);
+    return extensionTexture(*ext, "transmissionTexture", where + " KHR_materials_transmission",
                             false, m.transmissionTexture);
+  }
+
+  // The material's extension `name` when it is an object; null (with a warning when present but
+  // not an object) otherwise.
+  const tinygltf::Value* extensionObject(const tinygltf::Material& src, const char* name,
+                                         const std::string& where) {
+    auto found = src.extensions.find(name);
+    if (found == src.extensions.end()) return nullptr;
+    if (!found->second.IsObject()) {
+      warn(where + ": " + name + " is not an object, ignored");
+      return nullptr;
+    }
+    return &found->second;
+  }
+
+  // A factor in [0, 1] of extension `name`: kept as it was (`fallback` names that value) when
+  // not a number, clamped into [0, 1] with a warning when outside.
+  void unitFactor(const tinygltf::Value& ext, const char* name, const char* key,
+                  const std::string& where, const char* fallback, float& out) {
+    const tinygltf::Value* v = member(ext, key);
+    if (!v) return;
+    const double x = v->IsNumber() ? v->GetNumberAsDouble() : std::nan("");
+    if (!std::isfinite(x)) {
+      warn(where + ": " + name + " " + key + " is not a number, " + fallback + " used");
+      return;
+    }
+    out = narrow(std::clamp(x, 0.0, 1.0));
+    if (x < 0.0 || x > 1.0)
+      warn(format("%s: %s %s %g is outside [0, 1], %g used", where.c_str(), name, key, x,
+                  double(out)));
   }
 
   void decodeTextures() {

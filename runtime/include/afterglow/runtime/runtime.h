@@ -314,6 +314,8 @@ class Runtime {
   size_t probeCursor_ = 0;  // where the next budgeted updateProbes() starts
   // Refreshes probes [first, first + count) and returns how many it did.
   size_t refreshProbes(size_t first, size_t count);
+  // A point's probes and weights, weighed by their visibility of it (sampleProbes' location).
+  ProbeLocation locateSeen(glm::vec3 position, int* hint) const;
   void publishProbes();
 
   // Reflection probes: per capture pass, every probe's chain ([pass][probe], the transport's
