@@ -1,9 +1,12 @@
 // afterglow_bench runtime: what an engine pays for relighting (issue 4), single thread, for the
-// Cornell box (256² atlas) and Sponza-sun at 4 texels per metre:
+// Cornell box (256² atlas) and Sponza-sun at 4 and 16 texels per metre (bounced light on the
+// auto indirect grid, issue 29):
 //   - the transport file: size, bytes per texel, load time, memory the loaded runtime holds;
 //   - one bounce iteration (Solver::iterate: every gather point's links, then the clusters);
 //   - one update() of one bounce after a light colour change (bounce + direct + indirect
-//     texels + atlas resolve), what an engine runs per frame;
+//     texels + atlas resolve), what an engine runs per frame; with an indirect grid, the
+//     grid's atlases only (the engine composes the lightmap in its shader), and apart the
+//     CPU's composition of the whole lightmap;
 //   - one update() from scratch to convergence.
 //   afterglow_bench runtime [--cornell-only | --sponza-only] [--repeat N]
 #include <algorithm>
@@ -53,6 +56,10 @@ int measure(const char* label, scenes::Scene scene, float texelsPerUnit, int atl
   if (!runtime::saveTransport(baked->transport, path, &error)) return fail(error);
   const runtime::TransportData& t = baked->transport;
   const uint32_t texels = t.texelCount, clusters = t.clusterCount, points = t.gatherPointCount;
+  const uint32_t lightmapTexels = t.lightmapTexelCount();
+  const size_t layerBytes = t.lightmap.memoryBytes(), directBytes = t.lightmap.directBytes(),
+               sources = t.sources.size();
+  const bool grid = t.lightmap.active();
   const size_t links = t.linkCount(), sharedLinks = t.sharedFar.linkCount(), shared = t.sharedFar.rows();
   baked = Status::error("released");  // the runtime's memory below is its own
 
@@ -73,12 +80,24 @@ int measure(const char* label, scenes::Scene scene, float texelsPerUnit, int atl
   int frame = 0;
   runtime::UpdateOptions one;
   one.maxBounces = 1;
-  const double frameMs = bestMs(repeat, [&] {
+  one.composeLightmap = false;  // with one resolution this changes nothing
+  auto change = [&] {
     if (rt->lightCount() > 0)
       rt->setLightColor(0, glm::vec3(1.0f, 0.5f + 0.05f * float(frame++ % 10), 0.3f));
     else
       rt->setSky(glm::vec3(0.1f * float(frame++ % 10)));
+  };
+  const double frameMs = bestMs(repeat, [&] {
+    change();
     rt->update(one);
+  });
+  // The same with the lightmap composed on the CPU; its share apart.
+  runtime::UpdateOptions composed = one;
+  composed.composeLightmap = true;
+  double composeMs = 1e30;
+  const double composedFrameMs = bestMs(repeat, [&] {
+    change();
+    composeMs = std::min(composeMs, rt->update(composed).composeMilliseconds);
   });
   runtime::UpdateOptions full;
   full.fromScratch = true;
@@ -99,7 +118,21 @@ int measure(const char* label, scenes::Scene scene, float texelsPerUnit, int atl
   else
     std::printf("  one bounce   %.2f ms (%.2f ns a link)\n", bounceMs,
                 bounceMs * 1e6 / double(std::max<size_t>(1, links)));
-  std::printf("  frame        %.2f ms: light change + one bounce + texels + atlases\n", frameMs);
+  if (grid) {
+    std::printf("  lightmap     %u texels over an indirect grid of %u: layers %.1f MB (direct light "
+                "%.2f bytes a texel a source, %zu sources)\n",
+                lightmapTexels, texels, double(layerBytes) / 1e6,
+                double(directBytes) / double(lightmapTexels) / double(std::max<size_t>(1, sources)),
+                sources);
+    std::printf("  frame        %.2f ms: light change + one bounce + the grid's atlases (what an "
+                "engine uploads; it composes in its shader)\n",
+                frameMs);
+    std::printf("  composed     %.2f ms with the whole lightmap composed on the CPU (of which "
+                "composition %.2f ms)\n",
+                composedFrameMs, composeMs);
+  } else {
+    std::printf("  frame        %.2f ms: light change + one bounce + texels + atlases\n", frameMs);
+  }
   std::printf("  converged    %.1f ms from scratch (%d bounces)\n", fullMs, stats.bounces);
   return 0;
 }
@@ -133,8 +166,10 @@ int benchRuntime(int argc, char** argv) {
     }
     Result<scenes::Scene> scene = loadBenchScene(path);
     if (!scene) return fail(scene.message());
-    if (int s = measure("Sponza-sun at 4 texels/m", std::move(scene.value()), 4.0f, 0, repeat,
-                        10.0))
+    if (int s = measure("Sponza-sun at 4 texels/m", scene.value(), 4.0f, 0, repeat, 3.0))
+      return s;
+    if (int s = measure("Sponza-sun at 16 texels/m", std::move(scene.value()), 16.0f, 0, repeat,
+                        3.0))
       return s;
   }
   return 0;

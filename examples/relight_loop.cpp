@@ -2,7 +2,11 @@
 // along a hue cycle, run one bounce (Enlighten's one iteration a frame, warm-started from the
 // previous frame), and read the atlases back as a renderer would upload them.
 //
-//   relight_loop OUT/transport.agt [--frames N] [--light NAME]
+// A bake with an indirect grid (two resolutions) hands the engine its layers: the grid's atlases
+// each frame, composed in the engine's shader with the per-light direct layers (uploaded once)
+// and the light colours. --compose composes the lightmap on the CPU instead and uploads it.
+//
+//   relight_loop OUT/transport.agt [--frames N] [--light NAME] [--compose]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,7 +29,8 @@ glm::vec3 hue(float h) {
 }
 
 int usage() {
-  std::fprintf(stderr, "usage: relight_loop OUT/transport.agt [--frames N] [--light NAME]\n");
+  std::fprintf(stderr,
+               "usage: relight_loop OUT/transport.agt [--frames N] [--light NAME] [--compose]\n");
   return 2;
 }
 
@@ -34,8 +39,11 @@ int usage() {
 int main(int argc, char** argv) {
   std::string path, lightName;
   int frames = 120;
+  bool compose = false;
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
+    if (std::strcmp(argv[i], "--compose") == 0) {
+      compose = true;
+    } else if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
       frames = std::atoi(argv[++i]);
       if (frames <= 0) return usage();
     } else if (std::strcmp(argv[i], "--light") == 0 && i + 1 < argc) {
@@ -72,13 +80,22 @@ int main(int argc, char** argv) {
   const afterglow::runtime::UpdateStats first = rt->update();
   std::printf("initial solve: %d bounces, %.2f ms\n", first.bounces, first.milliseconds);
 
-  // GPU upload buffers, allocated once.
+  // What the engine uploads each frame: the lightmap's atlases, or with an indirect grid and
+  // the engine composing, the grid's (allocated once).
+  const bool layers = rt->indirectAtlasCount() > 0 && !compose;
+  if (rt->indirectAtlasCount() > 0)
+    std::printf("indirect grid: %d atlases (%dx%d); %s\n", rt->indirectAtlasCount(),
+                rt->indirectAtlasWidth(0), rt->indirectAtlasHeight(0),
+                layers ? "uploading its atlases, the engine composes"
+                       : "composing the lightmap on the CPU");
   std::vector<std::vector<float>> upload(size_t(rt->atlasCount()));
-  for (int a = 0; a < rt->atlasCount(); ++a)
+  for (int a = 0; a < rt->atlasCount() && !layers; ++a)
     upload[size_t(a)].resize(size_t(rt->atlasWidth(a)) * size_t(rt->atlasHeight(a)) * 3);
+  std::vector<std::vector<glm::vec3>> gridUpload(size_t(rt->indirectAtlasCount()));
 
   afterglow::runtime::UpdateOptions perFrame;
   perFrame.maxBounces = 1;
+  perFrame.composeLightmap = !layers;
   const glm::vec3 baseColor = rt->lightColor(light);
   const float brightness = std::max({baseColor.x, baseColor.y, baseColor.z, 1e-6f});
   std::vector<double> ms;
@@ -86,9 +103,13 @@ int main(int argc, char** argv) {
   for (int f = 0; f < frames; ++f) {
     rt->setLightColor(light, brightness * hue(float(f % 120) / 120.0f));
     const afterglow::runtime::UpdateStats s = rt->update(perFrame);
-    for (int a = 0; a < rt->atlasCount(); ++a) rt->readAtlas(a, upload[size_t(a)].data());
+    if (layers)
+      for (int a = 0; a < rt->indirectAtlasCount(); ++a) rt->readIndirectAtlas(a, gridUpload[size_t(a)]);
+    else
+      for (int a = 0; a < rt->atlasCount(); ++a) rt->readAtlas(a, upload[size_t(a)].data());
     ms.push_back(s.milliseconds);
-    std::printf("frame %4d  update %8.3f ms  change %.2e\n", f, s.milliseconds, double(s.change));
+    std::printf("frame %4d  update %8.3f ms  (compose %.3f ms, probes %.3f ms)  change %.2e\n", f,
+                s.milliseconds, s.composeMilliseconds, s.probeMilliseconds, double(s.change));
   }
 
   std::vector<double> sorted = ms;

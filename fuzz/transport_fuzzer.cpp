@@ -113,6 +113,49 @@ void touch(const TransportData& t) {
     if (a.mixStart.size() != a.mixPixel.size() + 1) fail("atlas mix offsets");
     resolveAtlas(a, texels, image);
   }
+  // Two resolutions: the lightmap's own atlases and texels, each texel's corners in the atlases
+  // above (read through the runtime's cornerWeights), the direct light per lightmap texel.
+  const LightmapLayers& l = t.lightmap;
+  for (const Source& s : t.sources)
+    if (l.active() && !s.texelTransfer.empty()) fail("texel transfer beside lightmap layers");
+  if (l.corners.size() != l.texelCount || (l.active() && l.direct.size() != t.sources.size()) ||
+      l.directScale.size() != l.direct.size())
+    fail("lightmap layers");
+  std::vector<glm::vec3> lightmapTexels(l.texelCount, glm::vec3(1.0f));
+  for (const AtlasLayout& a : l.atlases) {
+    // As the reflection capture samples it: a pixel at least.
+    if (a.width <= 0 || a.height <= 0 ||
+        a.texelOfPixel.size() != size_t(a.width) * size_t(a.height))
+      fail("lightmap atlas size");
+    for (uint32_t p : a.texelOfPixel)
+      if (p != kNoTexel && p >= l.texelCount) fail("lightmap atlas pixel");
+    for (uint32_t p : a.mixPixel)
+      if (p >= a.texelOfPixel.size()) fail("lightmap atlas mix pixel");
+    walk(a.mixStart, a.mixTexel, a.mixWeight, l.texelCount, "lightmap atlas mixes");
+    if (a.mixStart.size() != a.mixPixel.size() + 1) fail("lightmap atlas mix offsets");
+    resolveAtlas(a, lightmapTexels, image);
+  }
+  float bounced = 0.0f;
+  for (const IndirectCorners& c : l.corners) {
+    uint32_t texel[4];
+    float weight[4];
+    cornerWeights(c, t.atlases, texel, weight);
+    for (int k = 0; k < 4; ++k)
+      if (weight[k] > 0.0f) {
+        if (texel[k] >= t.texelCount) fail("lightmap corner texel");
+        bounced += weight[k] * texels[texel[k]].x;
+      }
+  }
+  (void)bounced;
+  for (const std::vector<uint16_t>& direct : l.direct) {
+    if (!direct.empty() && direct.size() != l.texelCount) fail("lightmap direct light");
+    for (uint16_t h : direct) sky += halfToFloat(h);
+  }
+  // Reflection hits (misses aside) sample the lightmap's atlases.
+  for (const ReflectionHit& h : t.reflections.hits)
+    if (h.material != kReflectionMiss && h.atlas != kReflectionNoAtlas &&
+        h.atlas >= t.lightmapAtlases().size())
+      fail("reflection hit atlas");
 }
 
 // Written and read back: accepted, and the same bytes again.

@@ -109,6 +109,41 @@ TransportData withReflections() {
   return d;
 }
 
+// withReflections() at two resolutions (lightmap_layers.h): its 6 texels become an indirect grid
+// under 5 lightmap texels in a 2x2 atlas and a 2x1 one with a mix; the sun's direct light is in
+// the layers (its texel transfer goes), the lamp has none.
+TransportData layered() {
+  TransportData d = withReflections();
+  d.sources[0].texelTransfer.clear();
+  LightmapLayers& l = d.lightmap;
+  l.texelCount = 5;
+  AtlasLayout a;
+  a.width = 2;
+  a.height = 2;
+  a.texelOfPixel = {0, 1, 2, 3};
+  l.atlases.push_back(a);
+  AtlasLayout b;
+  b.width = 2;
+  b.height = 1;
+  b.texelOfPixel = {4, kNoTexel};
+  b.mixPixel = {1};
+  b.mixStart = {0, 2};
+  b.mixTexel = {3, 4};
+  b.mixWeight = {0.5f, 0.5f};
+  l.atlases.push_back(b);
+  // Corners in the 3x2 indirect atlas (one on an empty pixel, renormalised away; on its top row
+  // the lower two alone) and in the 2x1 one; the last with no corner that counts.
+  l.corners = {{0, 0, 0, 0x00, 0xf, 0},
+               {1, 0, 0, 0x88, 0xf, 0},
+               {0, 1, 0, 0x4c, 0x3, 0},
+               {0, 0, 1, 0x08, 0x3, 0},
+               {0, 0, 0, 0x00, 0x0, 0}};
+  l.direct.resize(d.sources.size());
+  l.directScale.assign(d.sources.size(), 0.0f);
+  l.directScale[0] = encodeDirectLayer({0.25f, 1.0f, 0.5f, 3.0f, 0.0f}, l.direct[0]);
+  return d;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -123,6 +158,7 @@ int main(int argc, char** argv) {
       {"no-sky.agt", small(false, true)},
       {"no-filter.agt", small(true, false)},
       {"reflections.agt", withReflections()},
+      {"layers.agt", layered()},
   };
   for (const auto& [name, data] : seeds) {
     std::string error;

@@ -16,6 +16,8 @@
 #include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/runtime/runtime.h"
 #include "afterglow/scenes/gltf.h"
+#include "afterglow/uv/indirect.h"
+#include "afterglow/uv/unwrap.h"
 #include "bake_fixtures.h"
 #include "test_util.h"
 
@@ -123,10 +125,17 @@ int materialNamed(const scenes::Scene& scene, const std::string& name) {
 
 // McGuire's Cornell box lit by its ceiling lamp and a point light added in the room, so light
 // and emission changes are both there to test.
-TEST(Relight, CornellRelitEqualsAFreshBake) {
-  AG_REQUIRE_SHARED_SCENE(path, "cornell_box_mcguire/CornellBox-Original.gltf");
+// The Cornell box's changes, with bounced light solved at the lightmap's texels or, with
+// `twoResolutions`, on an indirect grid of about a quarter as many texels (the runtime then
+// composes each source's direct light per lightmap texel with the grid's bounced light).
+void expectCornellRelitEqualsFresh(const std::string& path, bool twoResolutions) {
   scenes::Scene scene = loadSmall(path, 96);
   ASSERT_FALSE(scene.meshes.empty());
+  uv::clearIndirect(scene);
+  if (twoResolutions) {
+    Result<uv::IndirectLayout> grid = uv::packIndirect(scene, uv::texelsPerUnitFor(scene, 2500.0));
+    ASSERT_TRUE(grid) << grid.message();
+  }
   scenes::Light lamp;
   lamp.name = "lamp";
   lamp.type = scenes::LightType::Point;
@@ -150,6 +159,7 @@ TEST(Relight, CornellRelitEqualsAFreshBake) {
   options.probes = mesh.value();
   const BakeResult base = bakeOrDie(scene, options);
   ASSERT_FALSE(base.lightmaps.empty());
+  ASSERT_EQ(base.transport.lightmap.active(), twoResolutions);
 
   {
     scenes::Scene e = scene;
@@ -213,6 +223,16 @@ TEST(Relight, CornellRelitEqualsAFreshBake) {
                              EXPECT_TRUE(rt.setSky(glm::vec3(0.4f, 0.6f, 1.2f)));
                            });
   }
+}
+
+TEST(Relight, CornellRelitEqualsAFreshBake) {
+  AG_REQUIRE_SHARED_SCENE(path, "cornell_box_mcguire/CornellBox-Original.gltf");
+  expectCornellRelitEqualsFresh(path, false);
+}
+
+TEST(Relight, CornellOnAnIndirectGridRelitEqualsAFreshBake) {
+  AG_REQUIRE_SHARED_SCENE(path, "cornell_box_mcguire/CornellBox-Original.gltf");
+  expectCornellRelitEqualsFresh(path, true);
 }
 
 // Sponza with its sun at a small resolution: every change a level designer makes to a sun.

@@ -43,6 +43,13 @@ const char kBakeHelp[] =
     "  --texels-per-unit N|auto lightmap texels per metre (times each node's lightmapScale);\n"
     "                           auto (the default) picks about 262,000 texels for the level\n"
     "  --atlas-size N           instead: the most texels per metre that fit one N x N atlas\n"
+    "  --indirect-texels-per-unit N|auto\n"
+    "                           texels per metre where bounced light is solved (Unity's\n"
+    "                           indirect resolution); each light's direct light stays at the\n"
+    "                           lightmap's. auto (the default): a grid of about 131,000\n"
+    "                           texels when that is at most half the lightmap's density,\n"
+    "                           else the lightmap's own texels; at or above the lightmap's\n"
+    "                           density: one resolution\n"
     "  --uv generate|keep       new lightmap UVs (default) or the authored TEXCOORD_1\n"
     "  --quality Q              draft | default | high: gather rays per gather point, first\n"
     "                           and penumbra shadow rays, smoothing passes (64/8/64/3,\n"
@@ -103,7 +110,8 @@ const char kBakeHelp[] =
 namespace {
 
 const std::vector<OptionSpec> kBakeOptions = {
-    {"output", 'o'},       {"texels-per-unit"}, {"atlas-size"}, {"uv"},
+    {"output", 'o'},       {"texels-per-unit"}, {"atlas-size"},  {"uv"},
+    {"indirect-texels-per-unit"},
     {"penumbra-samples"},  {"filter-passes"},
     {"quality"},           {"texel-rays"},      {"cluster-rays"},
     {"light-samples"},     {"emissive-samples"}, {"bounces"},
@@ -181,11 +189,17 @@ class PrintSteps : public bakefiles::PipelineEvents {
  public:
   explicit PrintSteps(bool quiet) : quiet_(quiet) {}
   void unwrapped(const bakefiles::BakeJob& job, const bakefiles::UnwrapStep& step) override {
-    if (!quiet_)
-      std::printf("texels        %zu in %zu atlases at %.3g texels/m; estimated memory %.2f GB "
-                  "(budget %.2f GB)\n",
-                  step.texels, step.atlases, double(step.texelsPerUnit), step.estimatedGb,
-                  double(job.memoryBudgetGb));
+    if (quiet_) return;
+    std::printf("texels        %zu in %zu atlases at %.3g texels/m; estimated memory %.2f GB "
+                "(budget %.2f GB)\n",
+                step.texels, step.atlases, double(step.texelsPerUnit), step.estimatedGb,
+                double(job.memoryBudgetGb));
+    if (step.indirectTexelsPerUnit > 0.0f)
+      std::printf("indirect      %.3g texels/m (%s), a %dx%d atlas: bounced light solved there\n",
+                  double(step.indirectTexelsPerUnit), step.indirectChoice.c_str(),
+                  step.indirectWidth, step.indirectHeight);
+    else
+      std::printf("indirect      at the lightmap's texels (%s)\n", step.indirectChoice.c_str());
     std::fflush(stdout);
   }
   void probesReady(const bakefiles::BakeJob& job, const bakefiles::ProbeStep& step) override {
@@ -272,6 +286,10 @@ int runBake(int argc, char** argv, int first) {
   const std::string density = args.get("texels-per-unit", "auto");
   if (density != "auto" &&
       !args.getFloat("texels-per-unit", 0.0f, 1e-3f, 1e5f, &job.texelsPerUnit))
+    return command.usage(args.error() + " (or 'auto')");
+  const std::string indirect = args.get("indirect-texels-per-unit", "auto");
+  if (indirect != "auto" && !args.getFloat("indirect-texels-per-unit", 0.0f, 1e-3f, 1e5f,
+                                           &job.indirectTexelsPerUnit))
     return command.usage(args.error() + " (or 'auto')");
   if (!args.getInt("atlas-size", 0, 16, 16384, &job.atlasSize) ||
       !args.getInt("texel-rays", options.links.texelRays, 1, 1 << 20, &options.links.texelRays) ||

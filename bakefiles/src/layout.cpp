@@ -14,6 +14,14 @@ std::string lightmapPng(size_t atlas) {
   return std::string(kLightmapsDir) + "/lightmap" + std::to_string(atlas) + ".png";
 }
 
+std::string indirectExr(size_t atlas) {
+  return std::string(kLightmapsDir) + "/indirect" + std::to_string(atlas) + ".exr";
+}
+
+std::string indirectPng(size_t atlas) {
+  return std::string(kLightmapsDir) + "/indirect" + std::to_string(atlas) + ".png";
+}
+
 std::string reflectionExr(size_t chain) {
   return chain == 0 ? "reflection_sky.exr" : "reflection_" + std::to_string(chain) + ".exr";
 }

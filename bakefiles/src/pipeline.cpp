@@ -11,6 +11,7 @@
 #include "afterglow/probes/reflection_placement.h"
 #include "afterglow/probes/tetrahedralize.h"
 #include "afterglow/trace/raytracer.h"
+#include "afterglow/uv/indirect.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -71,24 +72,74 @@ bool bakesProbes(const BakeJob& job) { return !job.bake.reference && job.probes 
 }  // namespace
 
 double estimateBakeBytes(const scenes::Scene& scene, size_t texels, size_t atlasPixels,
-                         float texelsPerUnit, const baker::BakeOptions& o) {
+                         float texelsPerUnit, const baker::BakeOptions& o,
+                         float indirectTexelsPerUnit) {
   // Sponza-sun at 4 texels/m: estimated 1.27 GB, measured peak 0.95 GB.
   size_t sources = scene.lights.size();
   for (const scenes::Material& m : scene.materials) sources += m.emissive() ? 1 : 0;
   double textureBytes = 0.0;
   for (const scenes::Texture& t : scene.textures)
     textureBytes += double(t.width) * double(t.height) * sizeof(glm::vec4);
+  // The texels that gather, and their density: the grid's, or the lightmap's.
+  const bool grid = indirectTexelsPerUnit > 0.0f && indirectTexelsPerUnit < texelsPerUnit;
+  const double density = grid ? double(indirectTexelsPerUnit) : double(texelsPerUnit);
+  const double ratio = density / double(texelsPerUnit);
+  const double gathering = double(texels) * ratio * ratio;
   // Charts smaller than a cluster make clusters smaller than clusterSize: count half the ideal.
-  double side = double(o.clusters.clusterSize) * double(texelsPerUnit);
+  double side = double(o.clusters.clusterSize) * density;
   if (o.clusters.clusterTexels > 0.0f) side = std::min(side, double(o.clusters.clusterTexels));
-  const double clusters = double(texels) / std::max(1.0, side * side * 0.5) + 1.0;
-  const double perTexel = 96.0 + 36.0 + 12.0 + 8.0 * double(o.links.texelRays) +
-                          4.0 * double(sources) * 2.0;
+  const double clusters = gathering / std::max(1.0, side * side * 0.5) + 1.0;
+  const double perTexel = 96.0 + 36.0 + 12.0 + 4.0 * double(sources) * 2.0;
+  // A lightmap texel of a grid: its direct light as floats, then halves, and its corners.
+  const double perLightmapTexel = grid ? 6.0 * double(sources) + 8.0 : 0.0;
+  const double perGatherTexel = 8.0 * double(o.links.texelRays);
   const double perCluster = 96.0 + 36.0 + 8.0 * double(o.links.clusterRays);
-  return textureBytes + double(texels) * perTexel + clusters * perCluster +
+  return textureBytes + double(texels) * (perTexel + perLightmapTexel) +
+         gathering * (perGatherTexel + (grid ? perTexel : 0.0)) + clusters * perCluster +
          double(atlasPixels) * 40.0 + double(scene.instancedTriangleCount()) * 160.0 +
          64.0 * 1024 * 1024;
 }
+
+namespace {
+
+// Two significant digits, so the report shows a number a person would pick.
+float roundDensity(float texelsPerUnit) {
+  const float magnitude = std::pow(10.0f, std::floor(std::log10(texelsPerUnit)) - 1.0f);
+  return std::round(texelsPerUnit / magnitude) * magnitude;
+}
+
+// The indirect grid: given or auto; packed when coarser than the lightmap.
+Status chooseIndirect(scenes::Scene& scene, const BakeJob& job, UnwrapStep& step) {
+  float density = job.indirectTexelsPerUnit;
+  if (density > 0.0f) {
+    step.indirectChoice = "given";
+  } else {
+    density = roundDensity(uv::texelsPerUnitFor(scene, kAutoIndirectTexels));
+    if (!(2.0f * density <= step.texelsPerUnit)) {
+      step.indirectChoice = format("auto: a grid of %.0fk texels would not be a quarter of the "
+                                   "lightmap's, bounced light at its texels",
+                                   kAutoIndirectTexels / 1000.0);
+      uv::clearIndirect(scene);
+      return Status::ok();
+    }
+    step.indirectChoice = format("auto: about %.0fk texels", kAutoIndirectTexels / 1000.0);
+  }
+  if (!(density < step.texelsPerUnit)) {
+    step.indirectChoice += ", not coarser than the lightmap: bounced light at its texels";
+    uv::clearIndirect(scene);
+    return Status::ok();
+  }
+  uv::PackOptions pack = job.unwrap.pack;
+  pack.texelsPerUnit = density;
+  Result<uv::IndirectLayout> packed = uv::packIndirect(scene, density, pack);
+  if (!packed) return Status::error(job.input + ": " + packed.message());
+  step.indirectTexelsPerUnit = density;
+  step.indirectWidth = packed->width;
+  step.indirectHeight = packed->height;
+  return Status::ok();
+}
+
+}  // namespace
 
 Result<UnwrapStep> unwrapForBake(scenes::Scene& scene, BakeJob& job, Progress& progress) {
   UnwrapStep step;
@@ -104,9 +155,7 @@ Result<UnwrapStep> unwrapForBake(scenes::Scene& scene, BakeJob& job, Progress& p
     texelsPerUnit = uv::texelsPerUnitFor(scene, kAutoTexels);
     if (!(texelsPerUnit > 0.0f))
       return Status::error(job.input + ": nothing to bake: no static instance has triangles");
-    // Two significant digits, so the report shows a number a person would pick.
-    const float magnitude = std::pow(10.0f, std::floor(std::log10(texelsPerUnit)) - 1.0f);
-    texelsPerUnit = std::round(texelsPerUnit / magnitude) * magnitude;
+    texelsPerUnit = roundDensity(texelsPerUnit);
   }
   job.unwrap.pack.texelsPerUnit = texelsPerUnit;
   Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, job.unwrap, progress);
@@ -119,8 +168,10 @@ Result<UnwrapStep> unwrapForBake(scenes::Scene& scene, BakeJob& job, Progress& p
     step.atlasPixels += size_t(a.width) * size_t(a.height);
   }
   step.atlases = unwrapped->metrics.atlases.size();
-  step.estimatedGb =
-      estimateBakeBytes(scene, step.texels, step.atlasPixels, texelsPerUnit, job.bake) / 1e9;
+  if (Status st = chooseIndirect(scene, job, step); !st) return st;
+  step.estimatedGb = estimateBakeBytes(scene, step.texels, step.atlasPixels, texelsPerUnit,
+                                       job.bake, step.indirectTexelsPerUnit) /
+                     1e9;
   return step;
 }
 
@@ -157,6 +208,8 @@ Result<ProbeSet> prepareProbes(scenes::Scene& scene, BakeJob& job, ProbeStep* st
 json bakeSettings(const BakeJob& job, const UnwrapStep& unwrapped, const ProbeSet& probes) {
   const baker::BakeOptions& o = job.bake;
   return {{"texelsPerUnit", job.unwrap.pack.texelsPerUnit},
+          {"indirectTexelsPerUnit", unwrapped.indirectTexelsPerUnit},
+          {"indirectChoice", unwrapped.indirectChoice},
           {"atlasSize", job.atlasSize},
           {"uv", job.unwrap.mode == uv::UvMode::Keep ? "keep" : "generate"},
           {"quality", job.quality},

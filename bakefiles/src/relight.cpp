@@ -283,13 +283,25 @@ std::optional<RelightError> copyBuffers(const json& gltf, const std::string& bak
   return std::nullopt;
 }
 
-// The relit lightmaps; returns report.json's "atlases".
-Result<json> writeRelitLightmaps(const runtime::Runtime& rt, const std::string& outDir,
-                                 AtomicOutput& out) {
+// The relit lightmaps (and the indirect grid's atlases, with two resolutions); returns
+// report.json's "atlases" and "indirectAtlases".
+Result<std::pair<json, json>> writeRelitLightmaps(const runtime::Runtime& rt,
+                                                  const std::string& outDir, AtomicOutput& out) {
   std::vector<std::vector<glm::vec3>> images(size_t(rt.atlasCount()));
   for (int a = 0; a < rt.atlasCount(); ++a) rt.readAtlas(a, images[size_t(a)]);
   std::vector<std::string> written;
-  return writeLightmaps(rt.data().atlases, images, outDir, out, written);
+  Result<json> atlases = writeLightmaps(rt.data().lightmapAtlases(), images, outDir, out, written);
+  if (!atlases) return atlases.status();
+  std::vector<std::vector<glm::vec3>> grid(size_t(rt.indirectAtlasCount()));
+  for (int a = 0; a < rt.indirectAtlasCount(); ++a) rt.readIndirectAtlas(a, grid[size_t(a)]);
+  json gridAtlases = json::array();
+  if (!grid.empty()) {
+    Result<json> gridFiles =
+        writeLightmaps(rt.data().atlases, grid, outDir, out, written, AtlasKind::Indirect);
+    if (!gridFiles) return gridFiles.status();
+    gridAtlases = gridFiles.value();
+  }
+  return std::make_pair(atlases.value(), gridAtlases);
 }
 
 // The relit light probes' files, and the reflection probes' through the bake's own writer (the
@@ -385,7 +397,7 @@ std::optional<RelightError> relightBake(RelitBake& bake) {
 
 std::optional<RelightError> writeRelitFolder(const RelitBake& bake, const std::string& outDir,
                                              AtomicOutput& out) {
-  Result<json> atlases = writeRelitLightmaps(*bake.runtime, outDir, out);
+  Result<std::pair<json, json>> atlases = writeRelitLightmaps(*bake.runtime, outDir, out);
   if (!atlases) return failedOutput(atlases.status());
   json gltf = bake.gltf;
   pointImagesBack(gltf, bake.dir, outDir);
@@ -393,7 +405,8 @@ std::optional<RelightError> writeRelitFolder(const RelitBake& bake, const std::s
   if (Status s = writeRelitProbes(bake, outDir, gltf, out); !s) return failedOutput(s);
   if (Status s = out.write(inFolder(outDir, kSceneGltf), gltf.dump(1) + "\n"); !s)
     return failedOutput(s);
-  const json report = relitReport(bake, atlases.value());
+  json report = relitReport(bake, atlases->first);
+  if (!atlases->second.empty()) report["indirectAtlases"] = atlases->second;
   if (Status s = out.write(inFolder(outDir, kReport), report.dump(2) + "\n"); !s)
     return failedOutput(s);
   return std::nullopt;

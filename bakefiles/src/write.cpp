@@ -139,13 +139,16 @@ void attachLightmaps(json& doc, size_t atlasCount, std::vector<std::string>& war
 Result<json> writeLightmaps(const std::vector<runtime::AtlasLayout>& layouts,
                            const std::vector<std::vector<glm::vec3>>& images,
                            const std::string& outDir, AtomicOutput& out,
-                           std::vector<std::string>& written) {
+                           std::vector<std::string>& written, AtlasKind kind) {
   json atlases = json::array();
+  const bool grid = kind == AtlasKind::Indirect;
   for (size_t a = 0; a < images.size() && a < layouts.size(); ++a) {
     const runtime::AtlasLayout& layout = layouts[a];
     const std::vector<glm::vec3>& image = images[a];
-    const std::string exr = inFolder(outDir, lightmapExr(a));
-    const std::string png = inFolder(outDir, lightmapPng(a));
+    const std::string exrName = grid ? indirectExr(a) : lightmapExr(a);
+    const std::string pngName = grid ? indirectPng(a) : lightmapPng(a);
+    const std::string exr = inFolder(outDir, exrName);
+    const std::string png = inFolder(outDir, pngName);
     if (Status s = writeExr(exr, layout.width, layout.height, image, out); !s) return s;
     std::vector<uint8_t> covered(image.size(), 0);
     for (size_t p = 0; p < covered.size() && p < layout.texelOfPixel.size(); ++p)
@@ -157,9 +160,10 @@ Result<json> writeLightmaps(const std::vector<runtime::AtlasLayout>& layouts,
     written.push_back(png);
     atlases.push_back({{"width", layout.width},
                        {"height", layout.height},
-                       {"exr", lightmapExr(a)},
-                       {"png", lightmapPng(a)},
+                       {"exr", exrName},
+                       {"png", pngName},
                        {"previewExposure", exposure}});
+    if (grid) atlases.back()["texCoord"] = 2;
   }
   return atlases;
 }
@@ -218,11 +222,21 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   const baker::TexelSet& texels = result.texels;
   Result<json> atlases = writeLightmaps(texels.atlases, result.lightmaps, outDir, out, written);
   if (!atlases) return atlases.status();
+  json indirectAtlases = json::array();
+  if (!result.indirectLightmaps.empty()) {
+    Result<json> grid = writeLightmaps(result.transport.atlases, result.indirectLightmaps, outDir,
+                                       out, written, AtlasKind::Indirect);
+    if (!grid) return grid.status();
+    indirectAtlases = grid.value();
+  }
 
   Result<SavedGltf> saved = saveAndReadGltf(scene, outDir);
   if (!saved) return saved.status();
   json& doc = saved->doc;
   attachLightmaps(doc, result.lightmaps.size(), warnings);
+  // An engine composing the lightmap itself: the grid's atlases, read at TEXCOORD_2 (the
+  // direct light's layers are in the transport).
+  if (!indirectAtlases.empty()) doc["extras"]["afterglow"]["indirectLightmaps"] = indirectAtlases;
   if (Status s = writeReflectionOutputs(result.transport, result.reflectionChains, result.dfg,
                                         outDir, doc, out, written);
       !s)
@@ -254,6 +268,28 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
                      {"bytesPerTexel", ec || texels.size() == 0
                                            ? 0.0
                                            : double(bytes) / double(texels.size())}};
+    // Where the bytes go (in memory, about the file's): the light probes', the reflection
+    // probes', the lightmap layers' (two resolutions), the rest the bounced light's solve.
+    const runtime::TransportData& tr = result.transport;
+    const size_t layers = tr.lightmap.memoryBytes(), probes = tr.probeBytes(),
+                 reflections = tr.reflectionBytes();
+    transportInfo["solveBytes"] = tr.memoryBytes() - layers - probes - reflections;
+    transportInfo["probeBytes"] = probes;
+    transportInfo["reflectionBytes"] = reflections;
+    transportInfo["indirectTexels"] = tr.texelCount;
+    if (tr.lightmap.active()) {
+      const double lightmapTexels = double(tr.lightmap.texelCount);
+      const size_t sources = tr.sources.size();
+      transportInfo["layers"] = {
+          {"bytes", layers},
+          {"lightmapTexels", tr.lightmap.texelCount},
+          // Each source's direct light, a half float a texel; where each texel reads the grid.
+          {"directBytesPerTexelPerSource",
+           sources == 0 ? 0.0 : double(tr.lightmap.directBytes()) / lightmapTexels / double(sources)},
+          {"cornerBytesPerTexel", double(sizeof(runtime::IndirectCorners))},
+          {"atlasBytes", layers - tr.lightmap.directBytes() -
+                             tr.lightmap.corners.size() * sizeof(runtime::IndirectCorners)}};
+    }
   }
 
   size_t valid = 0;
@@ -298,6 +334,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   report["stages"] = stages;
   report["peakMemoryBytes"] = peakMemoryBytes();
   report["atlases"] = atlases.value();
+  if (!indirectAtlases.empty()) report["indirectAtlases"] = indirectAtlases;
   report["warnings"] = warnings;
   const std::string reportPath = inFolder(outDir, kReport);
   if (Status s = out.write(reportPath, report.dump(2) + "\n"); !s) return s;

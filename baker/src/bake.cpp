@@ -18,6 +18,7 @@
 #include "afterglow/runtime/solver.h"
 #include "afterglow/trace/raytracer.h"
 #include "post/lightmap_post.h"
+#include "precompute/burial.h"
 #include "precompute/filter_light_edges.h"
 
 namespace afterglow::baker {
@@ -36,6 +37,10 @@ struct Bake {
   TexelGather gather;            // from gather to links (the bake's largest buffer)
   std::vector<Clusters> far;     // far cluster levels, finest first
   BakeResult result;
+  bool twoResolutions = false;   // hasIndirectGrid(scene)
+  std::vector<glm::vec3> grid;   // two resolutions: the grid texels' sky and bounced light
+  // The texels the transport is solved on: the indirect grid's, or the lightmap's.
+  TexelSet& solveTexels() { return twoResolutions ? result.indirectTexels : result.texels; }
 };
 
 // The authored light settings the solve uses: light sources follow Scene::lights in order
@@ -63,7 +68,10 @@ void applyLightSettings(const scenes::Scene& scene, runtime::TransportData& tr) 
 
 Status buildTracer(Bake& b) {
   b.progress.begin(stageName(Stage::RayTracer), 1);
-  Result<std::unique_ptr<trace::RayTracer>> built = trace::RayTracer::build(b.scene);
+  // The gather's hits find their texels through the lightmap UVs of the texels it solves on.
+  trace::RayTracerOptions options;
+  if (b.twoResolutions) options.lightmapUvSet = UvSet::Indirect;
+  Result<std::unique_ptr<trace::RayTracer>> built = trace::RayTracer::build(b.scene, options);
   b.progress.end();
   if (!built) return built.status();
   b.tracer = std::move(built.value());
@@ -84,6 +92,12 @@ Status placeTexels(Bake& b) {
   b.result.texels = std::move(texels.value());
   if (b.result.texels.size() == 0)
     return Status::error("nothing to bake: no static instance has lightmap texels (run uv first)");
+  if (!b.twoResolutions) return Status::ok();
+  texels = computeTexels(b.scene, *b.tracer, b.options.texels, b.progress, UvSet::Indirect);
+  if (!texels) return texels.status();
+  b.result.indirectTexels = std::move(texels.value());
+  if (b.result.indirectTexels.size() == 0)
+    return Status::error("nothing to bake: the indirect grid has no texels");
   return Status::ok();
 }
 
@@ -108,7 +122,7 @@ Status traceReference(Bake& b) {
 
 Status traceGather(Bake& b) {
   Result<TexelGather> gather =
-      gatherTexels(b.scene, *b.tracer, b.result.texels, b.options.links, b.progress);
+      gatherTexels(b.scene, *b.tracer, b.solveTexels(), b.options.links, b.progress);
   if (!gather) return gather.status();
   b.gather = std::move(gather.value());
   return Status::ok();
@@ -117,10 +131,10 @@ Status traceGather(Bake& b) {
 Status groupClusters(Bake& b) {
   const ClusterOptions& o = b.options.clusters;
   b.progress.begin(stageName(Stage::Clusters), 1);
-  b.result.clusters = computeClusters(b.scene, b.tracer.get(), b.result.texels, &b.gather, o);
+  b.result.clusters = computeClusters(b.scene, b.tracer.get(), b.solveTexels(), &b.gather, o);
   if (o.farScale > 1.0f && b.options.links.farDistance > 0.0f)
     for (int level = 1; level <= o.farLevels; ++level)
-      b.far.push_back(computeClusters(b.scene, b.tracer.get(), b.result.texels, &b.gather,
+      b.far.push_back(computeClusters(b.scene, b.tracer.get(), b.solveTexels(), &b.gather,
                                       farClusterOptions(o, level)));
   b.progress.advance();
   b.progress.end();
@@ -128,23 +142,40 @@ Status groupClusters(Bake& b) {
 }
 
 // Before the links: their far clusters' light check and the smoothing's read it
-// (LinkOptions::farLightRatio, filterLightRatio).
+// (LinkOptions::farLightRatio, filterLightRatio). With two resolutions, also which lightmap
+// texels are buried, where the rest read the indirect grid (after the gather, which found the
+// grid's buried texels) and each source's direct light at them.
 Status traceDirect(Bake& b) {
-  return computeDirect(b.scene, *b.tracer, b.result.texels, b.result.clusters, b.options.direct,
-                       b.result.transport, b.progress);
+  runtime::TransportData& tr = b.result.transport;
+  Status st = computeDirect(b.scene, *b.tracer, b.solveTexels(), b.result.clusters,
+                            b.options.direct, tr, b.progress);
+  if (!st || !b.twoResolutions) return st;
+  TexelSet& lightmap = b.result.texels;
+  buryLightmapTexels(b.scene, *b.tracer, lightmap, b.result.indirectTexels, b.options.links,
+                     b.progress);
+  if (b.progress.cancelled()) return Status::error("cancelled");
+  tr.lightmap.texelCount = lightmap.size();
+  tr.lightmap.corners =
+      indirectCorners(b.scene, *b.tracer, lightmap, b.result.indirectTexels, b.progress);
+  if (b.progress.cancelled()) return Status::error("cancelled");
+  // A texel with no grid texel of its own around it sits where the grid found everything
+  // buried (a gap the gather's rays saw closed): buried too, the lightmap fills it.
+  for (uint32_t t = 0; t < lightmap.size(); ++t)
+    if (tr.lightmap.corners[t].mask == 0) lightmap.valid[t] = 0;
+  return computeLightmapDirect(b.scene, *b.tracer, lightmap, b.options.direct, tr, b.progress);
 }
 
 Status refine(Bake& b) {
-  return refineGather(b.scene, *b.tracer, b.result.texels, b.result.clusters,
+  return refineGather(b.scene, *b.tracer, b.solveTexels(), b.result.clusters,
                       b.result.transport, b.options.links, b.gather, b.progress);
 }
 
 Status link(Bake& b) {
   const LinkOptions& o = b.options.links;
-  Status st = computeLinks(b.scene, *b.tracer, b.result.texels, b.gather, b.result.clusters, o,
+  Status st = computeLinks(b.scene, *b.tracer, b.solveTexels(), b.gather, b.result.clusters, o,
                            b.result.transport, b.progress, b.far);
   if (!st) return st;
-  cutSmoothingAcrossLight(b.result.texels, o.filterLightRatio, o.filterNoiseSigmas,
+  cutSmoothingAcrossLight(b.solveTexels(), o.filterLightRatio, o.filterNoiseSigmas,
                           b.gather.pointRays(), b.result.transport);
   b.gather = TexelGather();  // the hit codes are the bake's largest buffer
   return Status::ok();
@@ -152,7 +183,7 @@ Status link(Bake& b) {
 
 Status traceProbes(Bake& b) {
   const LinkOptions& o = b.options.links;
-  return computeProbeTransfer(b.scene, *b.tracer, b.result.texels, b.result.clusters, b.far,
+  return computeProbeTransfer(b.scene, *b.tracer, b.solveTexels(), b.result.clusters, b.far,
                               o.farDistance, o.farLightRatio, b.options.probes,
                               b.options.probeOptions, b.result.transport, b.progress);
 }
@@ -165,6 +196,10 @@ Status solve(Bake& b) {
   tr.indirectIntensity = b.options.indirectIntensity;
   tr.albedoBoost = b.options.albedoBoost;
   std::copy(b.sky, b.sky + runtime::kShCount, tr.skySh);
+  // The indirect grid's own direct light served the stages above (clusters, light checks); the
+  // lightmap's layers carry the sources' direct light from here on.
+  if (b.twoResolutions)
+    for (runtime::Source& s : tr.sources) s.texelTransfer = {};
   // The solver indexes these without checks; a stage that filled them inconsistently is a bug
   // to report, not a crash.
   if (const std::string why = tr.validate(); !why.empty())
@@ -175,6 +210,19 @@ Status solve(Bake& b) {
     solver.setParallelFor(blockRanges());
     solver.solve(b.options.solve);
     solver.gatherTexels(b.result.texelDirect, b.result.texelIndirect);
+    if (b.twoResolutions) {
+      // The runtime's composition, to the bit: the grid's light (sky and bounces) brought up to
+      // the lightmap's texels beside the sources' direct light.
+      std::vector<glm::vec3>& grid = b.grid;
+      grid.resize(b.result.texelDirect.size());
+      for (size_t t = 0; t < grid.size(); ++t)
+        grid[t] = b.result.texelDirect[t] + b.result.texelIndirect[t];
+      const uint32_t texels = tr.lightmap.texelCount;
+      b.result.texelDirect.assign(texels, glm::vec3(0.0f));
+      b.result.texelIndirect.assign(texels, glm::vec3(0.0f));
+      solver.lightmapDirect(b.result.texelDirect.data());
+      solver.upsampleIndirect(grid.data(), b.result.texelIndirect.data());
+    }
     b.result.probeSh.resize(solver.probeCount());
     solver.probeRadiance(0, b.result.probeSh.size(), b.result.probeSh.data());
   }
@@ -197,7 +245,21 @@ Status dilate(Bake& b) {
       r.lightmaps.emplace_back();
       runtime::resolveAtlas(layout, values, r.lightmaps.back());
     }
-    if (!b.options.reference) r.transport.atlases = r.texels.atlases;
+    if (b.twoResolutions) {
+      // The grid's atlases for engines, filled and dilated like the lightmap's (no seams
+      // stitched: the grid is read bilinearly, bounced light is smooth across them anyway).
+      PostOptions gridPost = post;
+      gridPost.stitchSeams = false;
+      computeAtlasMixes(r.indirectTexels, b.scene, gridPost);
+      for (const runtime::AtlasLayout& layout : r.indirectTexels.atlases) {
+        r.indirectLightmaps.emplace_back();
+        runtime::resolveAtlas(layout, b.grid, r.indirectLightmaps.back());
+      }
+      r.transport.atlases = r.indirectTexels.atlases;
+      r.transport.lightmap.atlases = r.texels.atlases;
+    } else if (!b.options.reference) {
+      r.transport.atlases = r.texels.atlases;
+    }
   }
   b.progress.advance();
   b.progress.end();
@@ -285,9 +347,16 @@ BakeOptions bakePreset(Quality quality) {
   return o;
 }
 
+bool hasIndirectGrid(const scenes::Scene& scene) {
+  for (const scenes::Instance& inst : scene.instances)
+    if (inst.isStatic && inst.lightmap.atlas >= 0 && inst.indirectLightmap.atlas >= 0) return true;
+  return false;
+}
+
 Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options,
                         Progress& progress) {
   Bake b(scene, options, progress);
+  b.twoResolutions = hasIndirectGrid(scene) && !options.reference;
   // The sky first: a bad image path should fail before minutes of precompute.
   if (!options.skyImage.empty()) {
     if (Status s = projectEquirectSky(options.skyImage, b.sky); !s) return s;

@@ -324,7 +324,7 @@ Cubemap shadeReflectionCapture(const TransportData& data, size_t probe,
         if (mat.emission != glm::vec3(0.0f)) radiance = halves(h.emission) * mat.emission;
         glm::vec3 lightmap(0.0f);
         if (h.atlas != kReflectionNoAtlas) {
-          const AtlasLayout& layout = data.atlases[h.atlas];
+          const AtlasLayout& layout = data.lightmapAtlases()[h.atlas];
           lightmap = sampleClampedBilinear(atlases[h.atlas], layout.width, layout.height,
                                            h.lightmapUv);
           radiance += halves(h.diffuse) * albedoScale[h.material] * lightmap;

@@ -59,9 +59,16 @@ Runtime::Runtime(TransportData data) : data_(std::move(data)) {
 
   direct_.assign(data_.texelCount, glm::vec3(0.0f));
   indirect_.assign(data_.texelCount, glm::vec3(0.0f));
+  if (data_.lightmap.active()) {
+    grid_.assign(data_.texelCount, glm::vec3(0.0f));
+    lightmapDirect_.assign(data_.lightmap.texelCount, glm::vec3(0.0f));
+    for (int b = 0; b < 2; ++b)
+      for (const AtlasLayout& layout : data_.atlases)
+        gridImages_[b].emplace_back(size_t(layout.width) * size_t(layout.height), glm::vec3(0.0f));
+  }
   for (int b = 0; b < 2; ++b) {
-    texels_[b].assign(data_.texelCount, glm::vec3(0.0f));
-    for (const AtlasLayout& layout : data_.atlases)
+    texels_[b].assign(data_.lightmapTexelCount(), glm::vec3(0.0f));
+    for (const AtlasLayout& layout : data_.lightmapAtlases())
       images_[b].emplace_back(size_t(layout.width) * size_t(layout.height), glm::vec3(0.0f));
     probes_[b].assign(data_.probes.count(), ShL2());
     if (data_.probes.count() > 0) {
@@ -321,17 +328,41 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
     if (options.maxBounces == 0 && stats.converged) break;
   }
 
-  // Texel values as the bake computes them: direct (sky first, then sources) + indirect.
+  // Texel values as the bake computes them: direct (sky first, then sources) + indirect; with
+  // two resolutions the grid's sum brought up to the lightmap's texels beside their direct light.
   const Clock::time_point outputStart = Clock::now();
   if (dirty & kDirtyDirect) solver_->directTexels(direct_.data());
   solver_->indirectTexels(indirect_.data());
+  // resolveAtlas assign()s the image; at its full size already, that never reallocates.
   const int back = 1 - front_;  // front_ is written only here, under updateLock
   std::vector<glm::vec3>& values = texels_[back];
-  for (size_t t = 0; t < values.size(); ++t) values[t] = direct_[t] + indirect_[t];
-  // resolveAtlas assign()s the image; at its full size already, that never reallocates.
-  for (size_t a = 0; a < data_.atlases.size(); ++a)
-    resolveAtlas(data_.atlases[a], values, images_[back][a]);
-  {
+  bool compose = true;
+  if (data_.lightmap.active()) {
+    for (size_t t = 0; t < grid_.size(); ++t) grid_[t] = direct_[t] + indirect_[t];
+    const int gridBack = 1 - gridFront_;
+    for (size_t a = 0; a < data_.atlases.size(); ++a)
+      resolveAtlas(data_.atlases[a], grid_, gridImages_[gridBack][a]);
+    {
+      std::lock_guard<std::mutex> lock(outputMutex_);
+      gridFront_ = gridBack;
+    }
+    // The direct layers follow the sources even when not composed now, so a later composing
+    // update sees them current.
+    if (dirty & kDirtyDirect) pendingLightmapDirect_ = true;
+    compose = options.composeLightmap;
+    if (compose) {
+      const Clock::time_point composeStart = Clock::now();
+      if (pendingLightmapDirect_) solver_->lightmapDirect(lightmapDirect_.data());
+      pendingLightmapDirect_ = false;
+      solver_->composeLightmap(lightmapDirect_.data(), grid_.data(), values.data());
+      stats.composeMilliseconds = millisecondsSince(composeStart);
+    }
+  } else {
+    for (size_t t = 0; t < values.size(); ++t) values[t] = direct_[t] + indirect_[t];
+  }
+  if (compose) {
+    const std::vector<AtlasLayout>& atlases = data_.lightmapAtlases();
+    for (size_t a = 0; a < atlases.size(); ++a) resolveAtlas(atlases[a], values, images_[back][a]);
     std::lock_guard<std::mutex> lock(outputMutex_);
     front_ = back;
   }
@@ -449,14 +480,14 @@ ProbeDirectionList Runtime::probeLights() const {
 
 // ---- Output -----------------------------------------------------------------------------------
 
-int Runtime::atlasCount() const { return int(data_.atlases.size()); }
+int Runtime::atlasCount() const { return int(data_.lightmapAtlases().size()); }
 
 int Runtime::atlasWidth(int atlas) const {
-  return atlas >= 0 && atlas < atlasCount() ? data_.atlases[size_t(atlas)].width : 0;
+  return atlas >= 0 && atlas < atlasCount() ? data_.lightmapAtlases()[size_t(atlas)].width : 0;
 }
 
 int Runtime::atlasHeight(int atlas) const {
-  return atlas >= 0 && atlas < atlasCount() ? data_.atlases[size_t(atlas)].height : 0;
+  return atlas >= 0 && atlas < atlasCount() ? data_.lightmapAtlases()[size_t(atlas)].height : 0;
 }
 
 bool Runtime::readAtlas(int atlas, float* rgb) const {
@@ -474,7 +505,26 @@ bool Runtime::readAtlas(int atlas, std::vector<glm::vec3>& image) const {
   return readAtlas(atlas, reinterpret_cast<float*>(image.data()));
 }
 
-int Runtime::texelCount() const { return int(data_.texelCount); }
+int Runtime::indirectAtlasCount() const {
+  return data_.lightmap.active() ? int(data_.atlases.size()) : 0;
+}
+
+int Runtime::indirectAtlasWidth(int atlas) const {
+  return atlas >= 0 && atlas < indirectAtlasCount() ? data_.atlases[size_t(atlas)].width : 0;
+}
+
+int Runtime::indirectAtlasHeight(int atlas) const {
+  return atlas >= 0 && atlas < indirectAtlasCount() ? data_.atlases[size_t(atlas)].height : 0;
+}
+
+bool Runtime::readIndirectAtlas(int atlas, std::vector<glm::vec3>& image) const {
+  if (atlas < 0 || atlas >= indirectAtlasCount()) return false;
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  image = gridImages_[gridFront_][size_t(atlas)];
+  return true;
+}
+
+int Runtime::texelCount() const { return int(data_.lightmapTexelCount()); }
 
 void Runtime::readTexels(glm::vec3* texels) const {
   std::lock_guard<std::mutex> lock(outputMutex_);

@@ -550,6 +550,47 @@ void Solver::indirectTexels(glm::vec3* indirect) const {
   });
 }
 
+void Solver::lightmapDirect(glm::vec3* direct) const {
+  const LightmapLayers& layers = data_.lightmap;
+  forBlocks(layers.texelCount, [&](size_t first, size_t last) {
+    std::fill(direct + first, direct + last, glm::vec3(0.0f));
+    for (size_t i = 0; i < data_.sources.size(); ++i) {
+      const std::vector<uint16_t>& halves = layers.direct[i];
+      const glm::vec3 scale = sourceScale_[i] * layers.directScale[i];
+      if (halves.empty() || scale == glm::vec3(0.0f)) continue;
+      for (size_t t = first; t < last; ++t) direct[t] += scale * halfToFloat(halves[t]);
+    }
+  });
+}
+
+namespace {
+
+// Lightmap texel t's indirect light from the grid's values.
+glm::vec3 upsampled(const TransportData& data, size_t t, const glm::vec3* grid) {
+  uint32_t texel[4];
+  float weight[4];
+  cornerWeights(data.lightmap.corners[t], data.atlases, texel, weight);
+  glm::vec3 sum(0.0f);
+  for (int k = 0; k < 4; ++k)
+    if (weight[k] > 0.0f) sum += weight[k] * grid[texel[k]];
+  return sum;
+}
+
+}  // namespace
+
+void Solver::upsampleIndirect(const glm::vec3* grid, glm::vec3* indirect) const {
+  forBlocks(data_.lightmap.texelCount, [&](size_t first, size_t last) {
+    for (size_t t = first; t < last; ++t) indirect[t] = upsampled(data_, t, grid);
+  });
+}
+
+void Solver::composeLightmap(const glm::vec3* direct, const glm::vec3* grid,
+                             glm::vec3* lightmap) const {
+  forBlocks(data_.lightmap.texelCount, [&](size_t first, size_t last) {
+    for (size_t t = first; t < last; ++t) lightmap[t] = direct[t] + upsampled(data_, t, grid);
+  });
+}
+
 void Solver::gatherTexels(std::vector<glm::vec3>& direct, std::vector<glm::vec3>& indirect) const {
   direct.resize(data_.texelCount);
   indirect.resize(data_.texelCount);

@@ -223,7 +223,7 @@ size_t TransportData::memoryBytes() const {
              bytesOf(clusterAlbedoTexture) + bytesOf(clusterEmissionTexture);
   for (const Source& s : sources)
     b += bytesOf(s.texelTransfer) + bytesOf(s.clusterTransfer) + bytesOf(s.probeTransfer);
-  b += probeBytes() + reflectionBytes();
+  b += probeBytes() + reflectionBytes() + lightmap.memoryBytes();
   for (const AtlasLayout& a : atlases)
     b += bytesOf(a.texelOfPixel) + bytesOf(a.mixPixel) + bytesOf(a.mixStart) +
          bytesOf(a.mixTexel) + bytesOf(a.mixWeight);
@@ -332,6 +332,13 @@ std::string TransportData::validate() const {
     return why.str();
   for (size_t i = 0; i < sources.size(); ++i) {
     const Source& s = sources[i];
+    // At two resolutions the texels are the indirect grid's: a source's direct light is per
+    // lightmap texel, in the layers, and a texel transfer beside it would be counted twice.
+    if (lightmap.active() && !s.texelTransfer.empty()) {
+      why << "source " << i << " ('" << printableName(s.name)
+          << "'): a texel transfer beside the lightmap layers' direct light";
+      return why.str();
+    }
     if ((!s.texelTransfer.empty() && s.texelTransfer.size() != texels) ||
         (!s.clusterTransfer.empty() && s.clusterTransfer.size() != clusters) ||
         (!s.probeTransfer.empty() && s.probeTransfer.size() != probeCount * kShCount)) {
@@ -369,7 +376,10 @@ std::string TransportData::validate() const {
         return why.str();
       }
   }
-  return reflections.validate(materials.size(), atlases.size());
+  // The layers' corners read the indirect grid, i.e. the atlases above.
+  if (std::string bad = lightmap.validate(sources.size(), atlases); !bad.empty()) return bad;
+  // Reflection hits sample the lightmap, whichever resolution its texels are.
+  return reflections.validate(materials.size(), lightmapAtlases().size());
 }
 
 }  // namespace afterglow::runtime

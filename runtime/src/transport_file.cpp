@@ -67,10 +67,11 @@ constexpr const char* kTexelSky = "TSKY";
 constexpr const char* kClusterSky = "CSKY";
 constexpr const char* kProbes = "PROB";
 constexpr const char* kReflections = "REFL";
+constexpr const char* kLightmap = "LAYR";
 constexpr const char* kRequired[] = {kInfo,      kAtlases,      kMaterials,   kSources,
                                      kClusters,  kFarClusters,  kSharedFar,   kLinks,
                                      kClusterGather, kGatherMaps, kTexelSky,  kClusterSky,
-                                     kProbes,    kReflections};
+                                     kProbes,    kReflections,  kLightmap};
 constexpr size_t kSectionCount = sizeof(kRequired) / sizeof(kRequired[0]);
 
 constexpr size_t kEntrySize = 32;    // one section table entry
@@ -140,6 +141,16 @@ struct Out {
     array(m.link);
     array(m.rowScale);
   }
+  // An atlas's fields, in ATLS and LAYR alike.
+  void atlas(const AtlasLayout& a) {
+    scalar(int32_t(a.width));
+    scalar(int32_t(a.height));
+    array(a.texelOfPixel);
+    array(a.mixPixel);
+    array(a.mixStart);
+    array(a.mixTexel);
+    array(a.mixWeight);
+  }
 };
 
 uint64_t rowsOf(const std::vector<uint32_t>& rowStart) {
@@ -165,15 +176,7 @@ const SectionWriter kWriters[] = {
      }},
     {kAtlases, 0,
      [](const TransportData& d, Out& o) {
-       for (const AtlasLayout& a : d.atlases) {
-         o.scalar(int32_t(a.width));
-         o.scalar(int32_t(a.height));
-         o.array(a.texelOfPixel);
-         o.array(a.mixPixel);
-         o.array(a.mixStart);
-         o.array(a.mixTexel);
-         o.array(a.mixWeight);
-       }
+       for (const AtlasLayout& a : d.atlases) o.atlas(a);
      }},
     {kMaterials, 0,
      [](const TransportData& d, Out& o) {
@@ -256,6 +259,17 @@ const SectionWriter kWriters[] = {
        }
        o.array(r.hits);
      }},
+    {kLightmap, 0,
+     [](const TransportData& d, Out& o) {
+       const LightmapLayers& l = d.lightmap;
+       o.scalar(l.texelCount);
+       o.scalar(uint32_t(l.atlases.size()));
+       for (const AtlasLayout& a : l.atlases) o.atlas(a);
+       o.array(l.corners);
+       o.scalar(uint32_t(l.direct.size()));
+       for (const std::vector<uint16_t>& direct : l.direct) o.array(direct);
+       o.array(l.directScale);
+     }},
 };
 static_assert(sizeof(kWriters) / sizeof(kWriters[0]) == kSectionCount, "");
 
@@ -274,6 +288,7 @@ uint64_t sectionCount(const TransportData& d, const char* id) {
   if (id == kTexelSky) return d.texelSky.size();
   if (id == kProbes) return d.probes.count();
   if (id == kReflections) return d.reflections.count();
+  if (id == kLightmap) return d.lightmap.texelCount;
   return d.clusterSky.size();  // kClusterSky
 }
 
@@ -352,6 +367,28 @@ struct In {
   }
 };
 
+// `count` atlases' fields (Out::atlas), ATLS's or LAYR's, named `one` and `many` in errors.
+bool readAtlases(In& in, uint64_t count, std::vector<AtlasLayout>& atlases, const char* one,
+                 const char* many) {
+  // Two ints and five array headers at least.
+  if (!in.records(count, 8 + 5 * 16, many)) return false;
+  atlases.resize(size_t(count));
+  for (uint64_t a = 0; a < count; ++a) {
+    AtlasLayout& l = atlases[size_t(a)];
+    int32_t width = 0, height = 0;
+    if (!in.scalar(width, "atlas width") || !in.scalar(height, "atlas height") ||
+        !in.array(l.texelOfPixel, "atlas pixels") || !in.array(l.mixPixel, "mix pixels") ||
+        !in.array(l.mixStart, "mix offsets") || !in.array(l.mixTexel, "mix texels") ||
+        !in.array(l.mixWeight, "mix weights")) {
+      in.why = std::string(one) + " " + std::to_string(a) + ": " + in.why;
+      return false;
+    }
+    l.width = width;
+    l.height = height;
+  }
+  return true;
+}
+
 template <class T>
 bool readSparse(In& in, std::vector<uint32_t>& rowStart, std::vector<uint32_t>& column,
                 std::vector<T>& weight) {
@@ -376,25 +413,7 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
     d.filterPasses = passes;
     return true;
   }
-  if (id == kAtlases) {
-    // Two ints and five array headers at least.
-    if (!in.records(count, 8 + 5 * 16, "atlases")) return false;
-    d.atlases.resize(size_t(count));
-    for (uint64_t a = 0; a < count; ++a) {
-      AtlasLayout& l = d.atlases[size_t(a)];
-      int32_t width = 0, height = 0;
-      if (!in.scalar(width, "atlas width") || !in.scalar(height, "atlas height") ||
-          !in.array(l.texelOfPixel, "atlas pixels") || !in.array(l.mixPixel, "mix pixels") ||
-          !in.array(l.mixStart, "mix offsets") || !in.array(l.mixTexel, "mix texels") ||
-          !in.array(l.mixWeight, "mix weights")) {
-        in.why = "atlas " + std::to_string(a) + ": " + in.why;
-        return false;
-      }
-      l.width = width;
-      l.height = height;
-    }
-    return true;
-  }
+  if (id == kAtlases) return readAtlases(in, count, d.atlases, "atlas", "atlases");
   if (id == kMaterials) {
     if (!in.records(count, 4 + 24, "materials")) return false;
     d.materials.resize(size_t(count));
@@ -491,6 +510,26 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
     }
     return in.array(r.hits, "reflection hits");
   }
+  if (id == kLightmap) {
+    LightmapLayers& l = d.lightmap;
+    uint32_t atlases = 0, sources = 0;
+    if (!in.scalar(l.texelCount, "lightmap texel count")) return false;
+    if (count != l.texelCount)
+      return in.fail("the table says " + std::to_string(count) +
+                     " lightmap texels, the section has " + std::to_string(l.texelCount));
+    if (!in.scalar(atlases, "lightmap atlas count") ||
+        !readAtlases(in, atlases, l.atlases, "lightmap atlas", "lightmap atlases") ||
+        !in.array(l.corners, "indirect corners") || !in.scalar(sources, "direct light count") ||
+        !in.records(sources, 16, "direct light layers"))  // an array header at least
+      return false;
+    l.direct.resize(sources);
+    for (uint32_t s = 0; s < sources; ++s)
+      if (!in.array(l.direct[s], "direct light")) {
+        in.why = "source " + std::to_string(s) + ": " + in.why;
+        return false;
+      }
+    return in.array(l.directScale, "direct light scales");
+  }
   const std::vector<uint32_t>* rowStart = nullptr;
   if (id == kLinks || id == kSharedFar) {
     SparseLinks& m = id == kLinks ? d.links : d.sharedFar;
@@ -540,7 +579,8 @@ const char* sectionOfComplaint(const std::string& why) {
   static const struct {
     const char* prefix;
     const char* id;
-  } kPrefixes[] = {{"reflection", kReflections},
+  } kPrefixes[] = {{"lightmap layers", kLightmap},
+                   {"reflection", kReflections},
                    {"probe", kProbes},
                    {"links", kLinks},
                    {"shared far fields", kSharedFar},

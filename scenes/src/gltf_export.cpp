@@ -222,6 +222,10 @@ struct Exporter {
         attributes["NORMAL"] = buffer.addFloats(prim.normals, "VEC3");
         if (!prim.uv0.empty()) attributes["TEXCOORD_0"] = buffer.addFloats(prim.uv0, "VEC2");
         if (!prim.uv1.empty()) attributes["TEXCOORD_1"] = buffer.addFloats(prim.uv1, "VEC2");
+        // The indirect grid's UVs (uv/indirect.h), where an engine reads the bounced light's
+        // atlas; glTF numbers texture coordinate sets without gaps.
+        if (!prim.uv0.empty() && !prim.uv1.empty() && prim.indirectUv.size() == n)
+          attributes["TEXCOORD_2"] = buffer.addFloats(prim.indirectUv, "VEC2");
         json jp = {{"attributes", std::move(attributes)},
                    {"indices", buffer.addIndices(prim.indices)},
                    {"mode", 4}};

@@ -217,20 +217,69 @@ TransportData makeTransport(const Shape& s, uint64_t seed = 1) {
   return d;
 }
 
+// makeTransport() at two resolutions (lightmap_layers.h): its texels are an indirect grid of 2
+// in one 2x1 atlas, under 3 lightmap texels in a 3x1 atlas (and a 1x1 one that only mixes, so
+// that the lightmap has more atlases than the indirect grid). The first source's direct light
+// is in the layers, the others have none. Valid.
+TransportData makeLayeredTransport() {
+  Shape s;
+  s.texels = 2;
+  s.clusters = 6;
+  s.farClusters = 2;
+  s.sharedFar = 2;
+  s.points = 2;
+  s.backRows = 2;
+  s.linksPerRow = 3;
+  s.lightsWithTexelTransfer = 0;
+  TransportData d = makeTransport(s, 3);
+  AtlasLayout indirect;
+  indirect.width = 2;
+  indirect.height = 1;
+  indirect.texelOfPixel = {0, 1};
+  d.atlases = {indirect};
+  buildGatherMaps(d);  // the texels' neighbours follow their atlas
+  for (Source& src : d.sources) src.texelTransfer.clear();  // the layers hold the direct light
+  // Reflection hits sample the lightmap: its two atlases.
+  for (ReflectionHit& h : d.reflections.hits)
+    if (h.atlas != kReflectionNoAtlas) h.atlas = uint16_t(h.atlas % 2);
+
+  LightmapLayers& l = d.lightmap;
+  l.texelCount = 3;
+  AtlasLayout lightmap;
+  lightmap.width = 3;
+  lightmap.height = 1;
+  lightmap.texelOfPixel = {0, 1, 2};
+  AtlasLayout mixed;
+  mixed.width = 1;
+  mixed.height = 1;
+  mixed.texelOfPixel = {kNoTexel};
+  mixed.mixPixel = {0};
+  mixed.mixStart = {0, 2};
+  mixed.mixTexel = {0, 2};
+  mixed.mixWeight = {0.25f, 0.75f};
+  l.atlases = {lightmap, mixed};
+  // The indirect atlas is one pixel high: only the lower corners (bits 0 and 1) can count.
+  // Every field differs somewhere, so a swap in the file would show.
+  l.corners = {{0, 0, 0, 0x00, 0x1, 0}, {0, 0, 0, 0x08, 0x3, 0}, {1, 0, 0, 0x35, 0x1, 0}};
+  l.direct.resize(d.sources.size());
+  l.directScale.assign(d.sources.size(), 1.0f);
+  l.directScale[0] = encodeDirectLayer({0.5f, 2.0f, 0.125f}, l.direct[0]);
+  l.directScale[2] = 0.0f;
+  return d;
+}
+
 void expectSparseEqual(const SparseMatrix& a, const SparseMatrix& b, const char* what) {
   EXPECT_EQ(a.rowStart, b.rowStart) << what;
   EXPECT_EQ(a.column, b.column) << what;
   EXPECT_EQ(a.weight, b.weight) << what;
 }
 
-void expectEqual(const TransportData& a, const TransportData& b) {
-  EXPECT_EQ(a.texelCount, b.texelCount);
-  EXPECT_EQ(a.clusterCount, b.clusterCount);
-  EXPECT_EQ(a.gatherPointCount, b.gatherPointCount);
-  ASSERT_EQ(a.atlases.size(), b.atlases.size());
-  for (size_t i = 0; i < a.atlases.size(); ++i) {
-    SCOPED_TRACE("atlas " + std::to_string(i));
-    const AtlasLayout &x = a.atlases[i], &y = b.atlases[i];
+void expectAtlasesEqual(const std::vector<AtlasLayout>& a, const std::vector<AtlasLayout>& b,
+                        const std::string& what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t i = 0; i < a.size(); ++i) {
+    SCOPED_TRACE(what + " " + std::to_string(i));
+    const AtlasLayout &x = a[i], &y = b[i];
     EXPECT_EQ(x.width, y.width);
     EXPECT_EQ(x.height, y.height);
     EXPECT_EQ(x.texelOfPixel, y.texelOfPixel);
@@ -239,6 +288,13 @@ void expectEqual(const TransportData& a, const TransportData& b) {
     EXPECT_EQ(x.mixTexel, y.mixTexel);
     EXPECT_EQ(x.mixWeight, y.mixWeight);
   }
+}
+
+void expectEqual(const TransportData& a, const TransportData& b) {
+  EXPECT_EQ(a.texelCount, b.texelCount);
+  EXPECT_EQ(a.clusterCount, b.clusterCount);
+  EXPECT_EQ(a.gatherPointCount, b.gatherPointCount);
+  expectAtlasesEqual(a.atlases, b.atlases, "atlas");
   ASSERT_EQ(a.materials.size(), b.materials.size());
   for (size_t i = 0; i < a.materials.size(); ++i) {
     EXPECT_EQ(a.materials[i].name, b.materials[i].name);
@@ -317,12 +373,29 @@ void expectEqual(const TransportData& a, const TransportData& b) {
   }
   ASSERT_EQ(r.hits.size(), t.hits.size());
   EXPECT_EQ(0, std::memcmp(r.hits.data(), t.hits.data(), r.hits.size() * sizeof(ReflectionHit)));
+  const LightmapLayers &u = a.lightmap, &v = b.lightmap;
+  EXPECT_EQ(u.texelCount, v.texelCount);
+  expectAtlasesEqual(u.atlases, v.atlases, "lightmap atlas");
+  ASSERT_EQ(u.corners.size(), v.corners.size());
+  for (size_t i = 0; i < u.corners.size(); ++i) {
+    SCOPED_TRACE("lightmap texel " + std::to_string(i));
+    const IndirectCorners &x = u.corners[i], &y = v.corners[i];
+    EXPECT_EQ(x.x, y.x);
+    EXPECT_EQ(x.y, y.y);
+    EXPECT_EQ(x.atlas, y.atlas);
+    EXPECT_EQ(x.fraction, y.fraction);
+    EXPECT_EQ(x.mask, y.mask);
+    EXPECT_EQ(x.reserved, y.reserved);
+  }
+  EXPECT_EQ(u.direct, v.direct);
+  EXPECT_EQ(u.directScale, v.directScale);
 }
 
 bool isEmpty(const TransportData& d) {
   return d.texelCount == 0 && d.clusterCount == 0 && d.atlases.empty() && d.sources.empty() &&
          d.materials.empty() && d.links.link.empty() && d.texelSky.empty() &&
-         d.probes.count() == 0 && d.reflections.count() == 0;
+         d.probes.count() == 0 && d.reflections.count() == 0 && !d.lightmap.active() &&
+         d.lightmap.corners.empty() && d.lightmap.direct.empty();
 }
 
 // ---- File surgery ----------------------------------------------------------------------------
@@ -437,13 +510,15 @@ TEST(TransportFile, TransportDataHasNoFieldTheFileMisses) {
   // The sizes with libstdc++ on 64-bit when this file format was written. A failure means a
   // field was added: serialise it (transport_file.cpp) and compare it in expectEqual() above.
 #if defined(__GLIBCXX__) && UINTPTR_MAX == 0xffffffffffffffffull
-  EXPECT_EQ(sizeof(TransportData), 1144u);
+  EXPECT_EQ(sizeof(TransportData), 1248u);
   EXPECT_EQ(sizeof(ReflectionTransport), 80u);
   EXPECT_EQ(sizeof(ReflectionProbeCapture), 152u);
   EXPECT_EQ(sizeof(AtlasLayout), 128u);
   EXPECT_EQ(sizeof(Source), 136u);
   EXPECT_EQ(sizeof(ProbeTransport), 232u);
   EXPECT_EQ(sizeof(MaterialParams), 56u);
+  EXPECT_EQ(sizeof(LightmapLayers), 104u);
+  EXPECT_EQ(sizeof(IndirectCorners), 8u);
 #else
   GTEST_SKIP() << "sizes recorded for libstdc++ on 64-bit only";
 #endif
@@ -480,6 +555,136 @@ TEST(TransportFile, RoundTripOfAnEmptyTransport) {
   std::string error;
   ASSERT_TRUE(parseTransport(bytes.data(), bytes.size(), parsed, &error)) << error;
   expectEqual(empty, parsed);
+}
+
+TEST(TransportFile, RoundTripKeepsLightmapLayers) {
+  const TransportData data = makeLayeredTransport();
+  ASSERT_TRUE(data.lightmap.active());
+  ASSERT_EQ(data.validate(), "");
+  // Some reflection hits sample the lightmap's second atlas, which the indirect grid lacks.
+  bool secondAtlas = false;
+  for (const ReflectionHit& h : data.reflections.hits) secondAtlas |= h.atlas == 1;
+  EXPECT_TRUE(secondAtlas);
+  // The layers count in the transport's memory.
+  TransportData oneResolution = data;
+  oneResolution.lightmap = LightmapLayers();
+  EXPECT_EQ(data.memoryBytes(), oneResolution.memoryBytes() + data.lightmap.memoryBytes());
+
+  const std::vector<uint8_t> bytes = serializeTransport(data);
+  std::vector<Section> sections = split(bytes);
+  const Section* layers = find(sections, "LAYR");
+  ASSERT_NE(layers, nullptr);
+  EXPECT_EQ(layers->count, 3u);
+  EXPECT_EQ(get32(layers->payload, 0), 3u);  // texels
+  EXPECT_EQ(get32(layers->payload, 4), 2u);  // atlases
+  TransportData parsed;
+  std::string error;
+  ASSERT_TRUE(parseTransport(bytes.data(), bytes.size(), parsed, &error)) << error;
+  expectEqual(data, parsed);
+  EXPECT_EQ(serializeTransport(parsed), bytes);
+
+  const std::string path = tempPath("layers.agt");
+  ASSERT_TRUE(saveTransport(data, path, &error)) << error;
+  TransportData loaded;
+  ASSERT_TRUE(loadTransport(path, loaded, &error)) << error;
+  expectEqual(data, loaded);
+  std::filesystem::remove(path);
+}
+
+TEST(TransportFile, InconsistentLightmapLayersAreRefused) {
+  const TransportData good = makeLayeredTransport();
+  ASSERT_EQ(good.validate(), "");
+  auto errorOf = [](const TransportData& d) {
+    EXPECT_NE(d.validate(), "");
+    return parseError(serializeTransport(d));
+  };
+  {
+    TransportData d = good;
+    d.lightmap.corners.pop_back();
+    EXPECT_EQ(errorOf(d), "section 'LAYR': lightmap layers: 2 corners for 3 lightmap texels");
+  }
+  {
+    TransportData d = good;
+    d.lightmap.corners[1].x = 1;  // its right-hand corner is then past the 2x1 indirect atlas
+    EXPECT_EQ(errorOf(d), "section 'LAYR': lightmap layers: texel 1 reads pixel (2, 0) outside "
+                          "its indirect atlas");
+  }
+  {
+    TransportData d = good;
+    d.lightmap.direct[0].pop_back();
+    EXPECT_EQ(errorOf(d),
+              "section 'LAYR': lightmap layers: source 0 has direct light for 2 of 3 texels");
+  }
+  {
+    TransportData d = good;
+    d.lightmap.direct.pop_back();
+    EXPECT_EQ(errorOf(d), "section 'LAYR': lightmap layers: direct light for 3 of 4 sources");
+  }
+  {
+    TransportData d = good;
+    d.lightmap.atlases[0].texelOfPixel[2] = 3;
+    EXPECT_EQ(errorOf(d), "section 'LAYR': lightmap layers: atlas 0 refers to texel 3 of 3");
+  }
+  {
+    TransportData d = good;
+    d.lightmap.texelCount = 0;
+    EXPECT_EQ(errorOf(d), "section 'LAYR': lightmap layers without lightmap texels");
+  }
+  {
+    // The direct light twice: per indirect texel and in the layers.
+    TransportData d = good;
+    d.sources[0].texelTransfer.assign(d.texelCount, 0.5f);
+    EXPECT_EQ(errorOf(d), "section 'SRCS': source 0 ('light 0'): a texel transfer beside the "
+                          "lightmap layers' direct light");
+  }
+  {
+    // The lightmap has two atlases (the indirect grid one): a hit on a third is refused.
+    TransportData d = good;
+    for (ReflectionHit& h : d.reflections.hits)
+      if (h.atlas != kReflectionNoAtlas) {
+        h.atlas = 2;
+        break;
+      }
+    const std::string error = errorOf(d);
+    EXPECT_EQ(error.rfind("section 'REFL': ", 0), 0u) << error;
+  }
+
+  // What the reader checks itself, before validate().
+  std::vector<Section> sections = split(serializeTransport(good));
+  {
+    std::vector<Section> s = sections;
+    find(s, "LAYR")->count = 4;
+    EXPECT_EQ(parseError(join(s)),
+              "section 'LAYR': the table says 4 lightmap texels, the section has 3");
+  }
+  {
+    std::vector<Section> s = sections;
+    put32(find(s, "LAYR")->payload, 4, 0xffffffffu);  // atlases
+    const std::string error = parseError(join(s));
+    EXPECT_EQ(error.rfind("section 'LAYR': 4294967295 lightmap atlases cannot fit", 0), 0u)
+        << error;
+  }
+  {
+    // From the end: directScale (16 + 4 × 4 bytes), three empty direct arrays (16 each), the
+    // first one's 16 + 3 × 2 bytes padded to 32, and before that the source count padded to 16
+    // after the corners.
+    std::vector<Section> s = sections;
+    std::vector<uint8_t>& p = find(s, "LAYR")->payload;
+    const size_t at = p.size() - 32 - 3 * 16 - 32 - 8;
+    ASSERT_EQ(get32(p, at), 4u);
+    put32(p, at, 0x10000000u);
+    const std::string error = parseError(join(s));
+    EXPECT_EQ(error.rfind("section 'LAYR': 268435456 direct light layers cannot fit", 0), 0u)
+        << error;
+  }
+  // Every cut of the section's payload is refused, naming it.
+  const size_t payloadSize = find(sections, "LAYR")->payload.size();
+  for (size_t n = 0; n < payloadSize; ++n) {
+    std::vector<Section> s = sections;
+    find(s, "LAYR")->payload.resize(n);
+    const std::string error = parseError(join(s));
+    EXPECT_EQ(error.rfind("section 'LAYR': ", 0), 0u) << "cut at " << n << ": " << error;
+  }
 }
 
 TEST(TransportFile, ArraysStartSixteenByteAligned) {
@@ -596,7 +801,8 @@ TEST(TransportFile, WrongMagicAndVersionSaySo) {
   EXPECT_EQ(parseError(std::vector<uint8_t>{}), "not an afterglow transport file");
 
   const std::string current = std::to_string(kTransportVersion);
-  for (uint32_t version : {kTransportVersion - 1, kTransportVersion + 1}) {
+  // 7: before the lightmap layers (LAYR).
+  for (uint32_t version : {1u, 6u, 7u, kTransportVersion + 1}) {
     std::vector<uint8_t> other = bytes;
     put32(other, 8, version);
     reseal(other);
@@ -617,7 +823,7 @@ TEST(TransportFile, SectionTableRules) {
   const TransportData data = makeTransport(Shape());
   const std::vector<uint8_t> bytes = serializeTransport(data);
   const std::vector<Section> sections = split(bytes);
-  ASSERT_EQ(sections.size(), 14u);
+  ASSERT_EQ(sections.size(), 15u);
   // join() rebuilds the writer's layout exactly.
   EXPECT_EQ(join(sections), bytes);
 

@@ -433,9 +433,10 @@ Status RayTracer::Impl::addGeometry(uint32_t instanceIndex, uint32_t primitiveIn
   }
   g.vertices = vertices;
   g.indices = indices;
-  if (prim.uv1.size() == vertexCount) {
+  if (const std::vector<glm::vec2>& uvs = scenes::lightmapUvs(prim, options.lightmapUvSet);
+      uvs.size() == vertexCount) {
     g.lightmapUv.resize(3 * triangles);
-    for (size_t i = 0; i < 3 * triangles; ++i) g.lightmapUv[i] = prim.uv1[indices[i]];
+    for (size_t i = 0; i < 3 * triangles; ++i) g.lightmapUv[i] = uvs[indices[i]];
   }
 
   rtcSetGeometryMask(geom, kMaskVisible | (inst.castShadows ? kMaskShadowCasters : 0u));
@@ -799,7 +800,8 @@ const glm::vec2* RayTracer::lightmapUvs(const Hit& hit) const {
 glm::vec2 RayTracer::uv(const Hit& hit, int set) const {
   if (!hit.valid()) return glm::vec2(0.0f);
   const Geometry& g = impl_->geometries[hit.geometry];
-  if (set == 1 && !g.lightmapUv.empty()) return mixCorners(&g.lightmapUv[3 * size_t(hit.triangle)], hit);
+  if (set == 1 && !g.lightmapUv.empty() && impl_->options.lightmapUvSet == scenes::LightmapUvSet::Lightmap)
+    return mixCorners(&g.lightmapUv[3 * size_t(hit.triangle)], hit);
   const std::vector<glm::vec2>* uvs = set == 0   ? &g.source->uv0
                                       : set == 1 ? &g.source->uv1
                                                  : nullptr;

@@ -36,13 +36,15 @@ glm::vec3 footprintAlbedo(const scenes::Scene& scene, const TexelSet& texels, in
   const scenes::Primitive& prim =
       scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]];
   const size_t first = size_t(texels.triangle[t]) * 3;
-  if (prim.uv0.size() != prim.positions.size() || prim.uv1.size() != prim.positions.size() ||
-      first + 2 >= prim.indices.size() || inst.lightmap.width <= 0)
+  const std::vector<glm::vec2>& lightmapUv = scenes::lightmapUvs(prim, texels.uvSet);
+  const scenes::LightmapLocation& lm = scenes::lightmapOf(inst, texels.uvSet);
+  if (prim.uv0.size() != prim.positions.size() || lightmapUv.size() != prim.positions.size() ||
+      first + 2 >= prim.indices.size() || lm.width <= 0)
     return diffuseAlbedo(scene, material, texels.uv0[t]);
-  const glm::dvec2 size(inst.lightmap.width, inst.lightmap.height);
+  const glm::dvec2 size(lm.width, lm.height);
   glm::dvec2 px[3], uv[3];
   for (int k = 0; k < 3; ++k) {
-    px[k] = glm::dvec2(prim.uv1[prim.indices[first + size_t(k)]]) * size;
+    px[k] = glm::dvec2(lightmapUv[prim.indices[first + size_t(k)]]) * size;
     uv[k] = glm::dvec2(prim.uv0[prim.indices[first + size_t(k)]]);
   }
   const glm::dmat2 pixels(px[1] - px[0], px[2] - px[0]), uvs(uv[1] - uv[0], uv[2] - uv[0]);

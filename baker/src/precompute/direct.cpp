@@ -322,6 +322,70 @@ struct SourceSet {
   }
 };
 
+// Every texel once with a few shadow rays per source, then again with many where the first
+// rays disagreed or a neighbour's did not agree with its own (the penumbra, and a texel's
+// width around it: a texel that saw all of a lamp with 16 rays may still be 3% shadowed):
+// transfer[k][t], E/π per unit source. `step` names the work in the progress.
+Status texelPasses(const TexelSet& texels, const SourceSet& sources, const DirectOptions& options,
+                   std::vector<std::vector<float>>& transfer, const std::string& step,
+                   Progress& progress) {
+  const uint32_t texelCount = texels.size();
+  const size_t sourceCount = sources.size();
+  std::vector<uint8_t> shade(size_t(texelCount) * sourceCount, uint8_t(Shade::Dark));
+  std::vector<uint8_t> refinable(sourceCount, 0);
+  for (size_t k = 0; k < sourceCount; ++k) refinable[k] = sources.refinable(k) ? 1 : 0;
+  // Small blocks: penumbrae and back-side clusters take most of the rays and sit together, so
+  // a few big blocks would leave a thread idle at the end.
+  constexpr size_t kTexelsPerBlock = 256;
+  progress.begin(step, texelCount);
+  parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
+    ShadowRays batch;
+    for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
+      if (!texels.valid[t]) continue;
+      const Receiver r{texels.position[t], texels.normal[t], texels.geometricNormal[t]};
+      for (size_t k = 0; k < sourceCount; ++k) {
+        const Shadowed s = sources.pass(k, r, t, false, batch);
+        transfer[k][t] = s.transfer;
+        shade[t * sourceCount + k] = uint8_t(s.shade);
+      }
+    }
+    progress.advance(end - begin);
+  }, kTexelsPerBlock);
+  progress.end();
+  if (progress.cancelled()) return Status::error("cancelled");
+  if (options.penumbraSamples > 0) {
+    progress.begin(step + ": penumbrae", texelCount);
+    parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
+    ShadowRays batch;
+      for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
+        if (!texels.valid[t]) continue;
+        const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
+        const Receiver r{texels.position[t], texels.normal[t], texels.geometricNormal[t]};
+        for (size_t k = 0; k < sourceCount; ++k) {
+          if (!refinable[k]) continue;
+          const uint8_t own = shade[t * sourceCount + k];
+          bool refine = own == uint8_t(Shade::Partial);
+          for (int n = 0; n < 8 && !refine; ++n) {
+            const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[n][0];
+            const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[n][1];
+            if (x < 0 || y < 0 || x >= layout.width || y >= layout.height) continue;
+            const uint32_t o = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
+            if (o == runtime::kNoTexel || !texels.valid[o]) continue;
+            refine = shade[size_t(o) * sourceCount + k] != own;
+          }
+          if (refine)
+            transfer[k][t] = sources.pass(k, r, t, true, batch).transfer;
+        }
+      }
+      progress.advance(end - begin);
+    }, kTexelsPerBlock);
+    progress.end();
+    if (progress.cancelled()) return Status::error("cancelled");
+  }
+
+  return Status::ok();
+}
+
 }  // namespace
 
 Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer, const TexelSet& texels,
@@ -359,63 +423,18 @@ Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
     s.clusterTransfer.assign(clusterCount, 0.0f);
   }
 
-  // Every texel once with a few shadow rays per source, then again with many where the first
-  // rays disagreed or a neighbour's did not agree with its own (the penumbra, and a texel's
-  // width around it: a texel that saw all of a lamp with 16 rays may still be 3% shadowed).
   const SourceSet sources{scene, tracer, emitters, options};
   const size_t sourceCount = sources.size();
-  std::vector<uint8_t> shade(size_t(texelCount) * sourceCount, uint8_t(Shade::Dark));
-  std::vector<uint8_t> refinable(sourceCount, 0);
-  for (size_t k = 0; k < sourceCount; ++k) refinable[k] = sources.refinable(k) ? 1 : 0;
-  // Small blocks: penumbrae and back-side clusters take most of the rays and sit together, so
-  // a few big blocks would leave a thread idle at the end.
-  constexpr size_t kTexelsPerBlock = 256, kClustersPerBlock = 32;
-  progress.begin(stageName(Stage::Direct), texelCount);
-  parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
-    ShadowRays batch;
-    for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
-      if (!texels.valid[t]) continue;
-      const Receiver r{texels.position[t], texels.normal[t], texels.geometricNormal[t]};
-      for (size_t k = 0; k < sourceCount; ++k) {
-        const Shadowed s = sources.pass(k, r, t, false, batch);
-        transport.sources[k].texelTransfer[t] = s.transfer;
-        shade[t * sourceCount + k] = uint8_t(s.shade);
-      }
-    }
-    progress.advance(end - begin);
-  }, kTexelsPerBlock);
-  progress.end();
-  if (progress.cancelled()) return Status::error("computeDirect: cancelled");
-  if (options.penumbraSamples > 0) {
-    progress.begin(stageStep(Stage::Direct, "penumbrae"), texelCount);
-    parallelForBlocks(texelCount, [&](size_t begin, size_t end, int) {
-    ShadowRays batch;
-      for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
-        if (!texels.valid[t]) continue;
-        const runtime::AtlasLayout& layout = texels.atlases[texels.atlas[t]];
-        const Receiver r{texels.position[t], texels.normal[t], texels.geometricNormal[t]};
-        for (size_t k = 0; k < sourceCount; ++k) {
-          if (!refinable[k]) continue;
-          const uint8_t own = shade[t * sourceCount + k];
-          bool refine = own == uint8_t(Shade::Partial);
-          for (int n = 0; n < 8 && !refine; ++n) {
-            const int x = texels.pixel[t].x + runtime::kNeighbourOffsets[n][0];
-            const int y = texels.pixel[t].y + runtime::kNeighbourOffsets[n][1];
-            if (x < 0 || y < 0 || x >= layout.width || y >= layout.height) continue;
-            const uint32_t o = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
-            if (o == runtime::kNoTexel || !texels.valid[o]) continue;
-            refine = shade[size_t(o) * sourceCount + k] != own;
-          }
-          if (refine)
-            transport.sources[k].texelTransfer[t] = sources.pass(k, r, t, true, batch).transfer;
-        }
-      }
-      progress.advance(end - begin);
-    }, kTexelsPerBlock);
-    progress.end();
-    if (progress.cancelled()) return Status::error("computeDirect: cancelled");
+  {
+    std::vector<std::vector<float>> transfer(sourceCount);
+    for (size_t k = 0; k < sourceCount; ++k) transfer[k].swap(transport.sources[k].texelTransfer);
+    const Status st =
+        texelPasses(texels, sources, options, transfer, stageName(Stage::Direct), progress);
+    for (size_t k = 0; k < sourceCount; ++k) transfer[k].swap(transport.sources[k].texelTransfer);
+    if (!st) return Status::error("computeDirect: " + st.message());
   }
 
+  constexpr size_t kTexelsPerBlock = 256, kClustersPerBlock = 32;
   // What a front cluster reflects of a punctual light: its texels' light averaged over their
   // footprints (one shadow ray from each of up to 16 points a texel), not at their samples. A
   // sunlit sliver thinner than a texel between two shaded samples (the sun through a gap
@@ -515,6 +534,26 @@ Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
   if (progress.cancelled()) return Status::error("computeDirect: cancelled");
   for (size_t i = 0; i < transport.sources.size(); ++i)
     transport.sources[i].clusterTransfer = std::move(backTransfer[i]);
+  return Status::ok();
+}
+
+Status computeLightmapDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                             const TexelSet& lightmapTexels, const DirectOptions& options,
+                             runtime::TransportData& transport, Progress& progress) {
+  const std::vector<Emitter> emitters = collectEmitters(scene);
+  const SourceSet sources{scene, tracer, emitters, options};
+  if (sources.size() != transport.sources.size())
+    return Status::error("computeLightmapDirect: the transport's sources are not the scene's");
+  std::vector<std::vector<float>> transfer(sources.size());
+  for (std::vector<float>& t : transfer) t.assign(lightmapTexels.size(), 0.0f);
+  const Status st = texelPasses(lightmapTexels, sources, options, transfer,
+                                stageStep(Stage::Direct, "lightmap texels"), progress);
+  if (!st) return Status::error("computeLightmapDirect: " + st.message());
+  runtime::LightmapLayers& layers = transport.lightmap;
+  layers.direct.assign(sources.size(), {});
+  layers.directScale.assign(sources.size(), 1.0f);
+  for (size_t k = 0; k < sources.size(); ++k)
+    layers.directScale[k] = runtime::encodeDirectLayer(transfer[k], layers.direct[k]);
   return Status::ok();
 }
 

@@ -16,6 +16,7 @@
 #include "afterglow/baker/gather.h"
 #include "afterglow/core/stages.h"
 #include "afterglow/core/parallel.h"
+#include "precompute/burial.h"
 #include "precompute/gather_batch.h"
 #include "precompute/glass_sky.h"
 #include "precompute/light_visibility.h"
@@ -248,27 +249,6 @@ TexelLookup lookupOf(const GatherInputs& in, const LightVisibility& lights,
   TexelLookup lookup(in.texels);
   if (in.options.lightMatch) lookup.setLights(&lights, &reached);
   return lookup;
-}
-
-// Whether an emitter that shines on texel t covers its whole footprint within one texel edge:
-// a ray along the normal from each of the footprint's four corners hits, nearer than the edge,
-// emissive geometry whose side facing the texel emits (the back of a double-sided lamp panel
-// just below a ceiling).
-bool litCavity(const trace::RayTracer& tracer, const TexelSet& texels, uint32_t t) {
-  const sampling::Frame frame(texels.normal[t]);
-  const float half = 0.5f * texels.edge[t];
-  for (const glm::vec2 corner : {glm::vec2(-1, -1), glm::vec2(1, -1), glm::vec2(1, 1),
-                                 glm::vec2(-1, 1)}) {
-    trace::Ray ray;
-    ray.origin = texels.position[t] + half * (corner.x * frame.t + corner.y * frame.b);
-    ray.direction = texels.normal[t];
-    ray.tfar = texels.edge[t];
-    const trace::Hit hit = tracer.intersect(ray);
-    if (!hit.valid()) return false;
-    const scenes::Material& m = tracer.material(hit);
-    if (!m.emissive() || !m.emitsFrom(hit.frontFace)) return false;
-  }
-  return true;
 }
 
 // Whether texel t, its first-pass rays summed to `sum`, is buried: inside a wall, or wedged in

@@ -103,7 +103,7 @@ void GatherBatch::findSlots(const trace::RayTracer& tracer, const TexelLookup& l
   for (size_t k = first; k < rays_.size(); ++k) {
     if (!lit_[k]) continue;
     const trace::Hit& hit = hits_[k];
-    uvs_[k] = corners_[k] ? trace::RayTracer::mixCorners(corners_[k], hit) : tracer.uv(hit, 1);
+    uvs_[k] = corners_[k] ? trace::RayTracer::mixCorners(corners_[k], hit) : tracer.lightmapUv(hit);
     slots_[k] = lookup.slot(scene, hit.instance, uvs_[k]);
     if (slots_[k]) __builtin_prefetch(slots_[k]);
   }

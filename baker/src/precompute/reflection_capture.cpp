@@ -132,7 +132,7 @@ Status captureReflectionProbes(const scenes::Scene& scene, const trace::RayTrace
   out = runtime::ReflectionTransport();
   if (scene.reflectionProbes.empty()) return Status::ok();
   out.bounces = options.bounces;
-  const size_t atlasCount = transport.atlases.size();
+  const size_t atlasCount = transport.lightmapAtlases().size();
   size_t total = 0;
   for (const scenes::ReflectionProbe& p : scene.reflectionProbes)
     total += size_t(runtime::kCubeFaceCount) * size_t(p.resolution) * size_t(p.resolution);

@@ -25,7 +25,8 @@ class TexelLookup {
   // The table entry for a point, or nullptr (outside the atlas, no lightmap): fetch it early
   // with __builtin_prefetch, the load misses the cache for nearly every hit.
   const uint32_t* slot(const scenes::Scene& scene, uint32_t instance, glm::vec2 uv1) const {
-    const scenes::LightmapLocation& where = scene.instances[instance].lightmap;
+    const scenes::LightmapLocation& where =
+        scenes::lightmapOf(scene.instances[instance], texels_.uvSet);
     if (where.atlas < 0 || size_t(where.atlas) >= resolved_.size()) return nullptr;
     const runtime::AtlasLayout& layout = texels_.atlases[size_t(where.atlas)];
     const float px = uv1.x * float(layout.width), py = uv1.y * float(layout.height);

@@ -110,33 +110,37 @@ double clippedArea(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c
   return 0.5 * std::abs(twice);
 }
 
-bool usableInstance(const scenes::Scene& scene, const scenes::Instance& inst) {
-  return inst.isStatic && inst.lightmap.atlas >= 0 && inst.lightmap.width > 0 &&
-         inst.lightmap.height > 0 && inst.mesh >= 0 && size_t(inst.mesh) < scene.meshes.size();
+bool usableInstance(const scenes::Scene& scene, const scenes::Instance& inst, UvSet uvs) {
+  const scenes::LightmapLocation& lm = scenes::lightmapOf(inst, uvs);
+  return inst.isStatic && lm.atlas >= 0 && lm.width > 0 && lm.height > 0 && inst.mesh >= 0 &&
+         size_t(inst.mesh) < scene.meshes.size();
 }
 
-bool validTriangle(const scenes::Primitive& prim, size_t t) {
+bool validTriangle(const scenes::Primitive& prim, size_t t, UvSet uvs) {
   const size_t n = prim.positions.size();
-  if (prim.uv1.size() != n) return false;
+  if (scenes::lightmapUvs(prim, uvs).size() != n) return false;
   return prim.indices[3 * t] < n && prim.indices[3 * t + 1] < n && prim.indices[3 * t + 2] < n;
 }
 
 // Every (pixel, triangle) touch of one instance, reduced to the best triangle per pixel and
 // sorted by pixel.
-std::vector<Touch> rasterizeInstance(const scenes::Scene& scene, const scenes::Instance& inst) {
+std::vector<Touch> rasterizeInstance(const scenes::Scene& scene, const scenes::Instance& inst,
+                                     UvSet uvs) {
   std::vector<Touch> touches;
   const scenes::Mesh& mesh = scene.meshes[size_t(inst.mesh)];
-  const int width = inst.lightmap.width, height = inst.lightmap.height;
+  const scenes::LightmapLocation& lm = scenes::lightmapOf(inst, uvs);
+  const int width = lm.width, height = lm.height;
   const glm::dvec2 size(width, height);
   const glm::dmat4 xf(inst.transform);
   for (size_t p = 0; p < mesh.primitives.size(); ++p) {
     const scenes::Primitive& prim = mesh.primitives[p];
     for (size_t t = 0; t < prim.triangleCount(); ++t) {
-      if (!validTriangle(prim, t)) continue;
+      if (!validTriangle(prim, t, uvs)) continue;
+      const std::vector<glm::vec2>& uv = scenes::lightmapUvs(prim, uvs);
       const uint32_t i0 = prim.indices[3 * t], i1 = prim.indices[3 * t + 1],
                      i2 = prim.indices[3 * t + 2];
-      const glm::dvec2 a = glm::dvec2(prim.uv1[i0]) * size, b = glm::dvec2(prim.uv1[i1]) * size,
-                       c = glm::dvec2(prim.uv1[i2]) * size;
+      const glm::dvec2 a = glm::dvec2(uv[i0]) * size, b = glm::dvec2(uv[i1]) * size,
+                       c = glm::dvec2(uv[i2]) * size;
       const double uvArea = 0.5 * std::abs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
       const glm::dvec3 q0(xf * glm::dvec4(glm::dvec3(prim.positions[i0]), 1.0));
       const glm::dvec3 q1(xf * glm::dvec4(glm::dvec3(prim.positions[i1]), 1.0));
@@ -214,27 +218,31 @@ glm::vec3 normalizedOr(const glm::vec3& v, const glm::vec3& fallback) {
 }  // namespace
 
 Result<TexelSet> computeTexels(const scenes::Scene& scene, const trace::RayTracer& tracer,
-                               const TexelOptions& options, Progress& progress) {
+                               const TexelOptions& options, Progress& progress,
+                               UvSet uvs) {
   TexelSet set;
+  set.uvSet = uvs;
 
   // Atlas sizes, which every instance in an atlas must agree on.
   int atlasCount = 0;
   for (const scenes::Instance& inst : scene.instances)
-    if (usableInstance(scene, inst)) atlasCount = std::max(atlasCount, inst.lightmap.atlas + 1);
+    if (usableInstance(scene, inst, uvs))
+      atlasCount = std::max(atlasCount, scenes::lightmapOf(inst, uvs).atlas + 1);
   if (atlasCount > 65535) return Result<TexelSet>::error("more than 65535 lightmap atlases");
   set.atlases.resize(size_t(atlasCount));
   for (const scenes::Instance& inst : scene.instances) {
-    if (!usableInstance(scene, inst)) continue;
-    runtime::AtlasLayout& layout = set.atlases[size_t(inst.lightmap.atlas)];
+    if (!usableInstance(scene, inst, uvs)) continue;
+    const scenes::LightmapLocation& lm = scenes::lightmapOf(inst, uvs);
+    runtime::AtlasLayout& layout = set.atlases[size_t(lm.atlas)];
     if (layout.width == 0) {
-      layout.width = inst.lightmap.width;
-      layout.height = inst.lightmap.height;
-    } else if (layout.width != inst.lightmap.width || layout.height != inst.lightmap.height) {
+      layout.width = lm.width;
+      layout.height = lm.height;
+    } else if (layout.width != lm.width || layout.height != lm.height) {
       return Result<TexelSet>::error("instance '" + inst.name + "': lightmap atlas " +
-                                     std::to_string(inst.lightmap.atlas) +
+                                     std::to_string(lm.atlas) +
                                      " has a different size than other instances in it");
     }
-    if (inst.lightmap.width > 65536 || inst.lightmap.height > 65536)
+    if (lm.width > 65536 || lm.height > 65536)
       return Result<TexelSet>::error("instance '" + inst.name + "': atlas larger than 65536");
   }
   for (runtime::AtlasLayout& layout : set.atlases)
@@ -245,8 +253,8 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const trace::RayTrace
   std::vector<std::vector<Touch>> perInstance(scene.instances.size());
   parallelFor(scene.instances.size(), [&](size_t i) {
     const scenes::Instance& inst = scene.instances[i];
-    if (usableInstance(scene, inst) && !progress.cancelled())
-      perInstance[i] = rasterizeInstance(scene, inst);
+    if (usableInstance(scene, inst, uvs) && !progress.cancelled())
+      perInstance[i] = rasterizeInstance(scene, inst, uvs);
     progress.advance();
   }, 1);
   progress.end();
@@ -256,7 +264,8 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const trace::RayTrace
   std::vector<PixelRecord> records;
   for (size_t i = 0; i < perInstance.size(); ++i) {
     if (perInstance[i].empty()) continue;
-    runtime::AtlasLayout& layout = set.atlases[size_t(scene.instances[i].lightmap.atlas)];
+    runtime::AtlasLayout& layout =
+        set.atlases[size_t(scenes::lightmapOf(scene.instances[i], uvs).atlas)];
     for (const Touch& t : perInstance[i]) {
       uint32_t& slot = layout.texelOfPixel[t.pixel];
       if (slot == kNoTexel) {
@@ -380,9 +389,10 @@ Result<TexelSet> computeTexels(const scenes::Scene& scene, const trace::RayTrace
       set.primitive[ti] = r.touch.primitive;
       set.triangle[ti] = r.touch.triangle;
       set.uv0[ti] = uv0;
-      set.atlas[ti] = uint16_t(inst.lightmap.atlas);
-      set.pixel[ti] = glm::u16vec2(r.touch.pixel % uint32_t(inst.lightmap.width),
-                                   r.touch.pixel / uint32_t(inst.lightmap.width));
+      const scenes::LightmapLocation& lm = scenes::lightmapOf(inst, uvs);
+      set.atlas[ti] = uint16_t(lm.atlas);
+      set.pixel[ti] = glm::u16vec2(r.touch.pixel % uint32_t(lm.width),
+                                   r.touch.pixel / uint32_t(lm.width));
       set.offset[ti] = offset;
       set.edge[ti] = texelSize;
     }
@@ -428,21 +438,23 @@ uint32_t texelAt(const scenes::Scene& scene, const TexelSet& texels, uint32_t in
                  uint32_t primitive, uint32_t triangle, glm::vec2 barycentric) {
   if (instance >= scene.instances.size()) return kNoTexel;
   const scenes::Instance& inst = scene.instances[instance];
-  if (!usableInstance(scene, inst)) return kNoTexel;
+  if (!usableInstance(scene, inst, texels.uvSet)) return kNoTexel;
   const scenes::Mesh& mesh = scene.meshes[size_t(inst.mesh)];
   if (primitive >= mesh.primitives.size()) return kNoTexel;
   const scenes::Primitive& prim = mesh.primitives[primitive];
-  if (triangle >= prim.triangleCount() || !validTriangle(prim, triangle)) return kNoTexel;
+  if (triangle >= prim.triangleCount() || !validTriangle(prim, triangle, texels.uvSet))
+    return kNoTexel;
+  const std::vector<glm::vec2>& uv = scenes::lightmapUvs(prim, texels.uvSet);
   const uint32_t* idx = &prim.indices[3 * size_t(triangle)];
   const float u = barycentric.x, v = barycentric.y;
-  const glm::vec2 uv1 = (1.0f - u - v) * prim.uv1[idx[0]] + u * prim.uv1[idx[1]] + v * prim.uv1[idx[2]];
+  const glm::vec2 uv1 = (1.0f - u - v) * uv[idx[0]] + u * uv[idx[1]] + v * uv[idx[2]];
   return texelAtUv(scene, texels, instance, uv1);
 }
 
 uint32_t texelAtUv(const scenes::Scene& scene, const TexelSet& texels, uint32_t instance,
                    glm::vec2 uv1) {
   if (instance >= scene.instances.size()) return kNoTexel;
-  const scenes::LightmapLocation& where = scene.instances[instance].lightmap;
+  const scenes::LightmapLocation& where = scenes::lightmapOf(scene.instances[instance], texels.uvSet);
   if (where.atlas < 0 || size_t(where.atlas) >= texels.atlases.size()) return kNoTexel;
   const runtime::AtlasLayout& layout = texels.atlases[size_t(where.atlas)];
   const glm::vec2 pixel = uv1 * glm::vec2(layout.width, layout.height);
@@ -479,15 +491,16 @@ int footprintPoints(const scenes::Scene& scene, const TexelSet& texels, uint32_t
   const scenes::Primitive& prim =
       scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]];
   const size_t first = size_t(texels.triangle[t]) * 3;
-  if (prim.uv1.size() != prim.positions.size() || first + 2 >= prim.indices.size() ||
-      inst.lightmap.width <= 0)
+  const std::vector<glm::vec2>& uv = scenes::lightmapUvs(prim, texels.uvSet);
+  const scenes::LightmapLocation& lm = scenes::lightmapOf(inst, texels.uvSet);
+  if (uv.size() != prim.positions.size() || first + 2 >= prim.indices.size() || lm.width <= 0)
     return 0;
-  const glm::dvec2 size(inst.lightmap.width, inst.lightmap.height);
+  const glm::dvec2 size(lm.width, lm.height);
   glm::dvec2 px[3];
   glm::dvec3 q[3];
   for (int k = 0; k < 3; ++k) {
     const uint32_t v = prim.indices[first + size_t(k)];
-    px[k] = glm::dvec2(prim.uv1[v]) * size;
+    px[k] = glm::dvec2(uv[v]) * size;
     q[k] = glm::dvec3(inst.toWorld(prim.positions[v]));
   }
   const glm::dmat2 pixels(px[1] - px[0], px[2] - px[0]);

@@ -28,6 +28,7 @@ enum class Stream : uint64_t {
   BackDistance = 7,
   Probes = 8,
   GlassSky = 9,
+  Burial = 10,
 };
 
 using afterglow::mix64;  // core/math.h

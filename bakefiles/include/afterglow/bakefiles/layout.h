@@ -33,6 +33,10 @@ constexpr const char kDfgExr[] = "dfg.exr";
 // "lightmaps/lightmap<atlas>.exr" and ".png".
 std::string lightmapExr(size_t atlas);
 std::string lightmapPng(size_t atlas);
+// Two resolutions: the indirect grid's atlases (its sky and bounced light, E/π), which an engine
+// reads at TEXCOORD_2 and composes with the direct light.
+std::string indirectExr(size_t atlas);
+std::string indirectPng(size_t atlas);
 // A reflection chain's cube map within kProbesDir: "reflection_sky.exr" for chain 0 (the sky),
 // "reflection_<i>.exr" for probe i's.
 std::string reflectionExr(size_t chain);

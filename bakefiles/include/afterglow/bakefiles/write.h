@@ -39,13 +39,18 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
                                                   const std::string& outDir,
                                                   const BakeReportInfo& info, AtomicOutput& out);
 
-// Each atlas's lightmap as OUT/lightmaps/lightmap<i>.exr (linear half float) and .png (tone
-// mapped, exposed for the atlas's covered texels), appending the paths to `written`. Returns
-// report.json's "atlases": per atlas its size, files and the PNG's exposure.
+// The lightmap's atlases, or (two resolutions) the indirect grid's.
+enum class AtlasKind { Lightmap, Indirect };
+
+// Each atlas as OUT/lightmaps/lightmap<i>.exr (indirect<i>.exr for the grid's; linear half
+// float) and .png (tone mapped, exposed for the atlas's covered texels), appending the paths to
+// `written`. Returns report.json's "atlases" (or "indirectAtlases"): per atlas its size, files
+// and the PNG's exposure (and the grid's UV set, texCoord 2).
 Result<nlohmann::json> writeLightmaps(const std::vector<runtime::AtlasLayout>& layouts,
                                       const std::vector<std::vector<glm::vec3>>& images,
                                       const std::string& outDir, AtomicOutput& out,
-                                      std::vector<std::string>& written);
+                                      std::vector<std::string>& written,
+                                      AtlasKind kind = AtlasKind::Lightmap);
 
 // The light probes a bake used, and how they came about (placed or read from a file).
 struct ProbeSet {

@@ -30,13 +30,22 @@ struct StageTime {
 
 struct BakeResult {
   runtime::TransportData transport;
-  TexelSet texels;
+  TexelSet texels;          // the lightmap's texels
+  // Two resolutions (the scene carries indirect UVs, uv/indirect.h): the indirect grid's texels,
+  // which the clusters, links and the transport's texels are made of; else empty, and those are
+  // made of `texels`.
+  TexelSet indirectTexels;
   Clusters clusters;
   // Per texel E/π: light arriving directly (sources and sky) and bounced light; texels marked
-  // invalid hold whatever the stages left (the lightmaps fill them from their neighbours).
+  // invalid hold whatever the stages left (the lightmaps fill them from their neighbours). With
+  // two resolutions the sky is solved with the bounced light, on the indirect grid, and comes
+  // with it.
   std::vector<glm::vec3> texelDirect;
   std::vector<glm::vec3> texelIndirect;
   std::vector<std::vector<glm::vec3>> lightmaps;  // per atlas, width*height linear E/π, dilated
+  // Two resolutions: per indirect atlas, the grid's sky and bounced light (E/π, dilated), what
+  // an engine composing the lightmap itself reads at the indirect UVs; else empty.
+  std::vector<std::vector<glm::vec3>> indirectLightmaps;
   // Per light probe (BakeOptions::probes), its radiance SH from the same solve.
   std::vector<runtime::ShL2> probeSh;
   // Per reflection probe, its prefiltered radiance (mips 0..6): [0] the sky, [i + 1]
@@ -50,6 +59,10 @@ struct BakeResult {
   uint64_t raysOccluded = 0;    // and any-hit queries (shadow and visibility rays)
   std::vector<std::string> warnings;
 };
+
+// Whether the scene's bounced light is solved on an indirect grid: some lightmapped instance
+// has indirect UVs.
+bool hasIndirectGrid(const scenes::Scene& scene);
 
 Result<BakeResult> bake(const scenes::Scene& scene, const BakeOptions& options = {},
                         Progress& progress = nullProgress());

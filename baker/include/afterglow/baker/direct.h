@@ -22,4 +22,12 @@ Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
                      const DirectOptions& options, runtime::TransportData& transport,
                      Progress& progress = nullProgress());
 
+// Two resolutions: when `texels` above were the indirect grid's, each source's direct light at
+// the lightmap's own texels, into transport.lightmap's direct layers (the sources computeDirect
+// made, in its order; the same shadow rays per texel as there, seeded by lightmap texel).
+Status computeLightmapDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                             const TexelSet& lightmapTexels, const DirectOptions& options,
+                             runtime::TransportData& transport,
+                             Progress& progress = nullProgress());
+
 }  // namespace afterglow::baker

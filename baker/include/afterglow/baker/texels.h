@@ -19,6 +19,8 @@ class RayTracer;
 
 namespace afterglow::baker {
 
+using UvSet = scenes::LightmapUvSet;
+
 // Texels as structure-of-arrays; index t is the runtime's texel index.
 struct TexelSet {
   std::vector<runtime::AtlasLayout> atlases;  // pixel -> texel index
@@ -37,6 +39,7 @@ struct TexelSet {
   std::vector<uint8_t> nearGeometry; // 1 when other geometry comes within 0.75 texels of the
                                      //   sample along the surface (a wall or object may cut
                                      //   through the texel's footprint)
+  UvSet uvSet = UvSet::Lightmap;     // the UVs and atlases the texels were rasterised from
   std::vector<uint8_t> valid;        // 0 when the texel is buried in geometry (no light); set
                                      //   by gatherTexels, all 1 after computeTexels
 
@@ -52,7 +55,8 @@ struct TexelSet {
 // sample per covered texel. Deterministic whatever the thread count.
 Result<TexelSet> computeTexels(const scenes::Scene& scene, const trace::RayTracer& tracer,
                                const TexelOptions& options = {},
-                               Progress& progress = nullProgress());
+                               Progress& progress = nullProgress(),
+                               UvSet uvs = UvSet::Lightmap);
 
 // The glTF material index of a texel's primitive (-1: the default material) and whether that
 // material is double-sided.
@@ -76,5 +80,14 @@ uint32_t texelAt(const scenes::Scene& scene, const TexelSet& texels, uint32_t in
 // mesh, which matters for tens of millions of gather hits).
 uint32_t texelAtUv(const scenes::Scene& scene, const TexelSet& texels, uint32_t instance,
                    glm::vec2 uv1);
+
+// Two resolutions (runtime/lightmap_layers.h): per lightmap texel, the 2×2 indirect texels
+// around its point in the indirect atlas that its bounced light is read from, masked to those
+// of its chart, not buried, and in sight of its sample. Invalid texels read none.
+std::vector<runtime::IndirectCorners> indirectCorners(const scenes::Scene& scene,
+                                                      const trace::RayTracer& tracer,
+                                                      const TexelSet& lightmap,
+                                                      const TexelSet& indirect,
+                                                      Progress& progress = nullProgress());
 
 }  // namespace afterglow::baker

@@ -86,6 +86,13 @@ struct UpdateOptions {
   // timeBudgetMs, the units stop before one that would overrun the whole call's budget (the
   // first always runs, when any is asked for).
   int reflectionPasses = -1;
+  // Two resolutions (TransportData::lightmap): compose the lightmap's texels and atlases on the
+  // CPU, each source's direct layer × its colour and intensity plus the indirect grid's light
+  // brought up to the lightmap's texels. Off: only the indirect grid's atlases are refreshed
+  // (readIndirectAtlas), for an engine that composes in its shader from them, the direct layers
+  // (data().lightmap) and the light colours; readAtlas and readTexels keep their last values,
+  // and so do the reflection probes' views of the lightmap. No effect with one resolution.
+  bool composeLightmap = true;
 };
 
 struct UpdateStats {
@@ -97,6 +104,7 @@ struct UpdateStats {
   double probeMilliseconds = 0;  // of which the probes took (their share of the call)
   int reflectionPasses = 0;           // reflection probe capture passes run (units, above)
   double reflectionMilliseconds = 0;  // of which the reflection probes took
+  double composeMilliseconds = 0;     // of which composing the lightmap took (two resolutions)
 };
 
 class Runtime {
@@ -187,6 +195,13 @@ class Runtime {
   // resolves them (padding, seams). False for an invalid index.
   bool readAtlas(int atlas, float* rgb) const;
   bool readAtlas(int atlas, std::vector<glm::vec3>& image) const;  // resized to width*height
+  // Two resolutions: the indirect grid's atlases (its sky and bounced light, E/π, resolved as
+  // the baker resolves them), which an engine reads at the indirect UVs (TEXCOORD_2 of the
+  // baked glTF). None with one resolution.
+  int indirectAtlasCount() const;
+  int indirectAtlasWidth(int atlas) const;
+  int indirectAtlasHeight(int atlas) const;
+  bool readIndirectAtlas(int atlas, std::vector<glm::vec3>& image) const;
   // Per texel (direct + indirect), texelCount() values.
   int texelCount() const;
   void readTexels(glm::vec3* texels) const;
@@ -296,6 +311,11 @@ class Runtime {
   std::mutex updateMutex_;
   std::vector<glm::vec3> direct_;    // kept until a light, emission or the sky changes
   std::vector<glm::vec3> indirect_;
+  // Two resolutions: the grid's values (direct_ + indirect_, sky and bounces) and the sources'
+  // direct light per lightmap texel (kept like direct_).
+  std::vector<glm::vec3> grid_;
+  std::vector<glm::vec3> lightmapDirect_;
+  bool pendingLightmapDirect_ = true;  // lightmapDirect_ is behind the sources
   double lastOutputMs_ = 0.0;        // texel output time of the last update (for the budget)
 
   // Double-buffered outputs: update() fills [1 - front_], then flips front_ under outputMutex_.
@@ -303,6 +323,10 @@ class Runtime {
   int front_ = 0;
   std::vector<glm::vec3> texels_[2];
   std::vector<std::vector<glm::vec3>> images_[2];
+  // Two resolutions: the grid's atlases, flipped on their own (an update may refresh them
+  // alone, UpdateOptions::composeLightmap).
+  int gridFront_ = 0;
+  std::vector<std::vector<glm::vec3>> gridImages_[2];
   // Light probes: refreshed in probeWork_ (by range, under updateMutex_), published by copying
   // it into the back buffer and flipping probeFront_ under outputMutex_.
   std::vector<ShL2> probeWork_;

@@ -72,6 +72,16 @@ class Solver {
   void skyTexels(glm::vec3* sky) const;  // S_t alone
   void indirectTexels(glm::vec3* indirect) const;
 
+  // Two resolutions (TransportData::lightmap, lightmap_layers.h), per lightmap texel: the
+  // sources' direct light as set now, and the indirect texels' values (grid[t] for indirect
+  // texel t: its sky and bounced light, directTexels + indirectTexels) brought up to it. The
+  // lightmap is their sum, direct + indirect, in that order; both arrays hold
+  // lightmap.texelCount values. Nothing happens with one resolution.
+  void lightmapDirect(glm::vec3* direct) const;
+  void upsampleIndirect(const glm::vec3* grid, glm::vec3* indirect) const;
+  // Their sum without keeping the indirect part: lightmap[t] = direct[t] + upsampled grid.
+  void composeLightmap(const glm::vec3* direct, const glm::vec3* grid, glm::vec3* lightmap) const;
+
   // Light probes (TransportData::probes): the radiance SH of probes [first, first + count) from
   // the current solution, with the texels' bounces (the links read the same R the texels' last
   // rows gathered), into out[0 .. count). Probes out of range are left out.

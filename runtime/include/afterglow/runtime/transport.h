@@ -19,13 +19,14 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/runtime/atlas_layout.h"
+#include "afterglow/runtime/lightmap_layers.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
 #include "afterglow/runtime/reflection_capture.h"
 
 namespace afterglow::runtime {
 
 constexpr int kShCount = 9;               // SH L2 coefficients (bands 0..2)
-constexpr uint32_t kNoTexel = 0xffffffffu;
 
 // The eight atlas neighbours of a texel; kNeighbourOffsets[7 - k] is opposite kNeighbourOffsets[k].
 constexpr int kNeighbourOffsets[8][2] = {{-1, -1}, {0, -1}, {1, -1}, {-1, 0},
@@ -146,27 +147,6 @@ struct MaterialParams {
   glm::vec3 albedo{0.8f};    // diffuse albedo factor (linear RGB) used for bounces
   glm::vec3 emission{0.0f};  // emitted radiance (linear RGB)
 };
-
-// Where texels sit in the lightmap atlases, and how texel values become the atlas image: a
-// pixel takes its texel's value, except the pixels the baker lists as mixes (texels too
-// buried to trust, the padding around charts that bilinear filtering reads, seams), which
-// take a weighted sum of texel values. resolveAtlas() applies it; the bake and the runtime
-// both go through it, so their lightmaps agree to the bit.
-struct AtlasLayout {
-  int width = 0;
-  int height = 0;
-  std::vector<uint32_t> texelOfPixel;  // width*height entries: texel index or kNoTexel
-  // Pixel mixPixel[i] = Σ_k mixWeight[k] · value[mixTexel[k]], k in [mixStart[i], mixStart[i+1]).
-  std::vector<uint32_t> mixPixel;
-  std::vector<uint32_t> mixStart{0};
-  std::vector<uint32_t> mixTexel;
-  std::vector<float> mixWeight;
-};
-
-// The atlas image (width*height, row 0 at v = 0) from per-texel values; pixels without a
-// texel or a mix are black.
-void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texelValues,
-                  std::vector<glm::vec3>& image);
 
 // IEEE half precision, for the bulky per-texel sky transfer (the lightmaps are half floats
 // anyway). Round to nearest even; no dependence on F16C.
@@ -310,6 +290,11 @@ struct TransportData {
   // Reflection probes (empty without): every cubemap texel's capture hit (reflection_capture.h).
   ReflectionTransport reflections;
 
+  // Two resolutions (lightmap_layers.h): when active, the texels above (texelCount, atlases, the
+  // sky and gather maps) are the indirect grid's, and these are the lightmap's own texels with
+  // each source's direct light; the sources' texelTransfer is then empty.
+  LightmapLayers lightmap;
+
   // Bake-level settings (Unity semantics; 1 is physically correct).
   float indirectIntensity = 1.0f;  // scales all bounced light reaching texels
   float albedoBoost = 1.0f;        // >= 1, pushes albedo toward white for bounces
@@ -323,6 +308,13 @@ struct TransportData {
   size_t linkCount() const { return links.linkCount() + sharedFar.linkCount(); }
   // The number of rows of `links` that belong to back-side clusters.
   uint32_t backRowCount() const { return uint32_t(links.rows()) - gatherPointCount; }
+  // The lightmap's atlases and texels, whichever resolution the transport was solved at.
+  const std::vector<AtlasLayout>& lightmapAtlases() const {
+    return lightmap.active() ? lightmap.atlases : atlases;
+  }
+  uint32_t lightmapTexelCount() const {
+    return lightmap.active() ? lightmap.texelCount : texelCount;
+  }
   // Empty when every array agrees with the counts (what the solver indexes without checks),
   // else what is wrong.
   std::string validate() const;

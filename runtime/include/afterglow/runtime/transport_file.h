@@ -1,7 +1,7 @@
 // The transport file (OUT/transport.agt): TransportData on disk, written by the bake and loaded
 // by engines. GLM and the standard library only, like the rest of the runtime.
 //
-// Format, version 6. Everything is little-endian; floats are IEEE binary32, halves binary16.
+// Format, version 8. Everything is little-endian; floats are IEEE binary32, halves binary16.
 //
 //   header (40 bytes, at 0)
 //     0  char[8]  magic "AGLOWTR\0"
@@ -25,7 +25,7 @@
 //              8 bytes of padding, then the elements packed: every array's data starts 16-byte
 //              aligned in the file, so it can be memcpy'd in one go (or used in place).
 //
-// Sections of version 6 (all required; any other id is skipped, so a later writer of the same
+// Sections of version 8 (all required; any other id is skipped, so a later writer of the same
 // version may add sections that older readers ignore). "count" is the table's element count,
 // which the reader checks against the payload.
 //   INFO  count 1: u32 texelCount, u32 clusterCount, u32 gatherPointCount, i32 filterPasses,
@@ -65,6 +65,14 @@
 //         array hits (44 bytes each, runtime::ReflectionHit's layout: u32 material, u16 atlas,
 //         u16 roughness (half), 2 × f32 lightmap UV, 3 × u16 diffuse, 3 × u16 emission,
 //         3 × u16 F0, 3 × u16 normal (halves), f32 distance). See reflection_capture.h.
+//   LAYR  count = lightmap texels (0 for a transport of one resolution, whose texels are the
+//         lightmap's): u32 texelCount (the same), u32 atlases, per atlas the fields of an ATLS
+//         atlas (the lightmap atlases; their texels are lightmap texels), array corners (8 bytes
+//         each, runtime::IndirectCorners' layout: u16 x, u16 y, u8 atlas, u8 fraction, u8 mask,
+//         u8 reserved), u32 sources (as SRCS, or 0), per source array u16 direct (half floats,
+//         empty or one per lightmap texel), array f32 directScale (per source). When texelCount
+//         is not 0 the sections above describe the indirect grid (ATLS, TSKY, GMAP), and the
+//         sources' texel transfer is empty. See runtime::LightmapLayers.
 // (rows = the rowStart array's length minus one.)
 //
 // The reader checks, in this order: magic, version, header and file sizes, checksum, the section
@@ -86,8 +94,8 @@
 namespace afterglow::runtime {
 
 // 2: 4-byte links, far clusters, gather map source; 3: shared far fields; 4: link rows padded
-// to fours; 6: reflection probes; 7: the light probes' depth maps
-constexpr uint32_t kTransportVersion = 7;
+// to fours; 6: reflection probes; 7: the light probes' depth maps; 8: lightmap layers (LAYR)
+constexpr uint32_t kTransportVersion = 8;
 constexpr char kTransportMagic[8] = {'A', 'G', 'L', 'O', 'W', 'T', 'R', '\0'};
 constexpr uint32_t kTransportHeaderSize = 40;
 

@@ -103,6 +103,10 @@ struct Primitive {
   std::vector<glm::vec3> normals;
   std::vector<glm::vec2> uv0;
   std::vector<glm::vec2> uv1;  // lightmap UVs (authored, or written by afterglow uv)
+  // Indirect UVs (Unity's realtime lightmap UVs): uv1's charts repacked at the indirect density
+  // into the indirect atlas, where bounced light is solved (uv/indirect.h); empty when the
+  // bounced light is solved at the lightmap's own texels.
+  std::vector<glm::vec2> indirectUv;
   std::vector<uint32_t> indices;  // 3 per triangle; always filled, also for non-indexed input
 
   size_t triangleCount() const { return indices.size() / 3; }
@@ -122,6 +126,9 @@ struct LightmapLocation {
   int height = 0;
 };
 
+// The lightmap UV set a stage works on: the lightmap's (uv1) or the indirect grid's (indirectUv).
+enum class LightmapUvSet : uint8_t { Lightmap, Indirect };
+
 // A mesh placed in the world by a glTF node. One mesh used by several nodes stays one Mesh with
 // several Instances.
 struct Instance {
@@ -134,6 +141,7 @@ struct Instance {
   float lightmapScale = 1.0f;  // "lightmapScale": multiplies texelsPerUnit for this instance
   bool castShadows = true;     // "castShadows"
   LightmapLocation lightmap;
+  LightmapLocation indirectLightmap;  // where its indirectUv point (atlas -1: none)
 
   // A point of its mesh in world space.
   glm::vec3 toWorld(glm::vec3 local) const { return glm::vec3(transform * glm::vec4(local, 1.0f)); }
@@ -237,6 +245,14 @@ struct Scene {
   // Triangles over unique meshes.
   size_t meshTriangleCount() const;
 };
+
+// A primitive's UVs and an instance's atlas in one of the two lightmap UV sets.
+inline const std::vector<glm::vec2>& lightmapUvs(const Primitive& prim, LightmapUvSet set) {
+  return set == LightmapUvSet::Indirect ? prim.indirectUv : prim.uv1;
+}
+inline const LightmapLocation& lightmapOf(const Instance& instance, LightmapUvSet set) {
+  return set == LightmapUvSet::Indirect ? instance.indirectLightmap : instance.lightmap;
+}
 
 // Calls fn(triangle, a, b, c) for each triangle of `prim` whose three indices are in range, with
 // its corners in world space through `instance` (finite or not: the caller decides).

@@ -113,6 +113,9 @@ struct RayTracerOptions {
   bool alphaTest = true;         // cut out alphaMode MASK materials (false: all opaque)
   bool blendAsMask = false;      // cut out alphaMode BLEND materials at their alphaCutoff
                                  // instead of letting light through them as glass
+  // The lightmap UVs lightmapUvs() and lightmapUv() give: TEXCOORD_1, or the indirect grid's
+  // (the precompute's texels when bounced light is solved coarse).
+  scenes::LightmapUvSet lightmapUvSet = scenes::LightmapUvSet::Lightmap;
 };
 
 // What build() did with the scene, for report.json and warnings.
@@ -181,9 +184,15 @@ class RayTracer {
   glm::vec3 shadingNormal(const Hit& hit) const;
   // Interpolated UV of set 0 (TEXCOORD_0) or 1 (TEXCOORD_1); (0, 0) when the set is absent.
   glm::vec2 uv(const Hit& hit, int set) const;
-  // The hit triangle's lightmap UVs (TEXCOORD_1) at its three corners, next to each other (one
-  // cache line to prefetch), or nullptr without that set; mixCorners() interpolates them.
+  // The hit triangle's lightmap UVs (RayTracerOptions::lightmapUvSet) at its three corners, next
+  // to each other (one cache line to prefetch), or nullptr without that set; mixCorners()
+  // interpolates them.
   const glm::vec2* lightmapUvs(const Hit& hit) const;
+  // Their value at the hit ((0, 0) without).
+  glm::vec2 lightmapUv(const Hit& hit) const {
+    const glm::vec2* corners = lightmapUvs(hit);
+    return corners ? mixCorners(corners, hit) : glm::vec2(0.0f);
+  }
   static glm::vec2 mixCorners(const glm::vec2* corners, const Hit& hit) {
     const float u = hit.barycentric.x, v = hit.barycentric.y;
     return (1.0f - u - v) * corners[0] + u * corners[1] + v * corners[2];

@@ -1,0 +1,30 @@
+// Texels buried in geometry: inside a wall, or wedged in a gap narrower than the texel, where
+// no one value can hold. They take no light of their own; the lightmap fills them from their
+// neighbours (post/lightmap_post.h).
+#pragma once
+
+#include <cstdint>
+
+#include "afterglow/baker/options.h"
+#include "afterglow/baker/texels.h"
+#include "afterglow/core/progress.h"
+
+namespace afterglow::baker {
+
+// Whether an emitter that shines on texel t covers its whole footprint within one texel edge:
+// a ray along the normal from each of the footprint's four corners hits, nearer than the edge,
+// emissive geometry whose side facing the texel emits (the back of a double-sided lamp panel
+// just below a ceiling). Such a cavity is lit, not buried.
+bool litCavity(const trace::RayTracer& tracer, const TexelSet& texels, uint32_t t);
+
+// Two resolutions: the gather finds the indirect grid's buried texels with its own rays; the
+// lightmap's texels cast none, so those near other geometry (TexelSet::nearGeometry) or whose
+// 2×2 indirect texels are not all valid texels of their instance (an object standing on them,
+// a chart's edge) cast kBurialRays cosine rays here and are judged by the gather's rule (LinkOptions::maxBackfaceFraction,
+// maxEnclosedFraction). Marks them invalid in `lightmap`; returns how many.
+constexpr int kBurialRays = 16;
+size_t buryLightmapTexels(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                          TexelSet& lightmap, const TexelSet& indirect,
+                          const LinkOptions& options, Progress& progress = nullProgress());
+
+}  // namespace afterglow::baker

@@ -1,0 +1,185 @@
+// Two resolutions: where each lightmap texel reads its bounced light in the indirect grid.
+#include <algorithm>
+#include <cmath>
+
+#include "afterglow/baker/texels.h"
+#include "afterglow/core/parallel.h"
+#include "afterglow/core/stages.h"
+#include "afterglow/trace/raytracer.h"
+#include "precompute/indirect_grid.h"
+
+namespace afterglow::baker {
+
+bool indirectPoint(const scenes::Scene& scene, const TexelSet& texels, uint32_t t,
+                   glm::dvec2& out) {
+  const scenes::Instance& inst = scene.instances[texels.instance[t]];
+  const scenes::Primitive& prim = scene.meshes[size_t(inst.mesh)].primitives[texels.primitive[t]];
+  const size_t first = size_t(texels.triangle[t]) * 3;
+  if (prim.uv1.size() != prim.positions.size() || prim.indirectUv.size() != prim.positions.size() ||
+      first + 2 >= prim.indices.size() || inst.indirectLightmap.width <= 0)
+    return false;
+  const glm::dvec2 fine(inst.lightmap.width, inst.lightmap.height);
+  const glm::dvec2 coarse(inst.indirectLightmap.width, inst.indirectLightmap.height);
+  glm::dvec2 a[3], b[3];
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t v = prim.indices[first + size_t(k)];
+    a[k] = glm::dvec2(prim.uv1[v]) * fine;
+    b[k] = glm::dvec2(prim.indirectUv[v]) * coarse;
+  }
+  // A chart is only turned and scaled between the two atlases (uv/indirect.h), so one edge fixes
+  // the map, as a complex multiplication: the triangle's longest, which a sliver has too (a
+  // sliver's barycentrics would not be worth much).
+  int i = 0;
+  double longest = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double l = glm::length(a[(k + 1) % 3] - a[k]);
+    if (l > longest) longest = l, i = k;
+  }
+  if (!(longest > 1e-9)) return false;
+  const int j = (i + 1) % 3;
+  const glm::dvec2 from = a[j] - a[i], to = b[j] - b[i];
+  const double norm = glm::dot(from, from);
+  const glm::dvec2 w((to.x * from.x + to.y * from.y) / norm, (to.y * from.x - to.x * from.y) / norm);
+  const glm::dvec2 z = glm::dvec2(texels.pixel[t]) + 0.5 - a[i];
+  out = b[i] + glm::dvec2(w.x * z.x - w.y * z.y, w.x * z.y + w.y * z.x);
+  return std::isfinite(out.x) && std::isfinite(out.y);
+}
+
+uint32_t gridTexel(const scenes::Scene& scene, const TexelSet& lightmap, uint32_t t,
+                   const TexelSet& indirect, int x, int y) {
+  const scenes::LightmapLocation& where =
+      scene.instances[lightmap.instance[t]].indirectLightmap;
+  if (where.atlas < 0 || size_t(where.atlas) >= indirect.atlases.size()) return runtime::kNoTexel;
+  const runtime::AtlasLayout& layout = indirect.atlases[size_t(where.atlas)];
+  if (x < 0 || y < 0 || x >= layout.width || y >= layout.height) return runtime::kNoTexel;
+  const uint32_t o = layout.texelOfPixel[size_t(y) * size_t(layout.width) + size_t(x)];
+  if (o == runtime::kNoTexel || !indirect.valid[o] || indirect.instance[o] != lightmap.instance[t])
+    return runtime::kNoTexel;
+  return o;
+}
+
+namespace {
+
+// The corners of one lightmap texel: grid texels around its point, and whether its sample sees
+// theirs (computed once each: neighbouring squares share them).
+class CornerSearch {
+ public:
+  CornerSearch(const scenes::Scene& scene, const trace::RayTracer& tracer,
+               const TexelSet& lightmap, const TexelSet& indirect, uint32_t t, int x0, int y0)
+      : scene_(scene), tracer_(tracer), lightmap_(lightmap), indirect_(indirect), t_(t),
+        x0_(x0 - 1), y0_(y0 - 1) {}
+
+  // Bits of square (x, y)'s corners k = (k & 1, k >> 1) that are grid texels of t's instance,
+  // and of those whose samples t's sample sees.
+  void square(int x, int y, uint8_t& ours, uint8_t& seen) {
+    ours = seen = 0;
+    for (int k = 0; k < 4; ++k) {
+      const Pixel& p = pixel(x + (k & 1), y + (k >> 1));
+      if (p.texel == runtime::kNoTexel) continue;
+      ours |= uint8_t(1u << k);
+      if (p.seen) seen |= uint8_t(1u << k);
+    }
+  }
+
+ private:
+  struct Pixel {
+    bool known = false;
+    bool seen = false;
+    uint32_t texel = runtime::kNoTexel;
+  };
+  const Pixel& pixel(int x, int y) {
+    Pixel& p = cache_[size_t(y - y0_) * 4 + size_t(x - x0_)];
+    if (p.known) return p;
+    p.known = true;
+    p.texel = gridTexel(scene_, lightmap_, t_, indirect_, x, y);
+    if (p.texel == runtime::kNoTexel) return p;
+    // No bounced light through a wall standing on the chart between the two samples.
+    const glm::vec3 d = indirect_.position[p.texel] - lightmap_.position[t_];
+    const float length = glm::length(d);
+    if (!(length > 0.0f)) {
+      p.seen = true;
+      return p;
+    }
+    trace::Ray ray;
+    ray.origin = lightmap_.position[t_];
+    ray.direction = d / length;
+    ray.tfar = 0.99f * length;
+    ray.mask = trace::kMaskShadowCasters;
+    p.seen = !tracer_.occluded(ray);
+    return p;
+  }
+  const scenes::Scene& scene_;
+  const trace::RayTracer& tracer_;
+  const TexelSet& lightmap_;
+  const TexelSet& indirect_;
+  uint32_t t_;
+  int x0_, y0_;      // the 4 × 4 pixels around the point's own square
+  Pixel cache_[16];
+};
+
+// The squares tried when a point's own has no usable corner, nearest first.
+constexpr int kSquares[9][2] = {{0, 0},  {-1, 0}, {1, 0},  {0, -1}, {0, 1},
+                                {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
+
+}  // namespace
+
+std::vector<runtime::IndirectCorners> indirectCorners(const scenes::Scene& scene,
+                                                      const trace::RayTracer& tracer,
+                                                      const TexelSet& lightmap,
+                                                      const TexelSet& indirect,
+                                                      Progress& progress) {
+  std::vector<runtime::IndirectCorners> corners(lightmap.size());
+  progress.begin(stageStep(Stage::Direct, "indirect corners"), lightmap.size());
+  parallelForBlocks(lightmap.size(), [&](size_t begin, size_t end, int) {
+    for (size_t t = begin; t < end && !progress.cancelled(); ++t) {
+      glm::dvec2 p;
+      if (!lightmap.valid[t] || !indirectPoint(scene, lightmap, uint32_t(t), p)) continue;
+      const scenes::LightmapLocation& where =
+          scene.instances[lightmap.instance[t]].indirectLightmap;
+      // p among the texel centres (at half-integers): its square's lower-left centre.
+      const glm::dvec2 q = p - 0.5;
+      const int bx = int(std::floor(q.x)), by = int(std::floor(q.y));
+      CornerSearch search(scene, tracer, lightmap, indirect, uint32_t(t), bx, by);
+      // The point's own square when a corner of it is in sight; else the nearest square that
+      // has one (a texel beside an object whose grid texels are buried under it), with the
+      // point clamped onto it; else the nearest with grid texels at all (a convex surface that
+      // bends away between samples).
+      int sx = 0, sy = 0;
+      uint8_t mask = 0;
+      double bestSeen = 1e30, bestOurs = 1e30;
+      int oursX = 0, oursY = 0;
+      uint8_t oursMask = 0;
+      for (const auto& d : kSquares) {
+        const int x = bx + d[0], y = by + d[1];
+        const glm::dvec2 f = glm::clamp(q - glm::dvec2(x, y), 0.0, 1.0);
+        const double distance = glm::length(q - glm::dvec2(x, y) - f);
+        if (distance >= bestSeen) continue;
+        uint8_t ours, seen;
+        search.square(x, y, ours, seen);
+        if (seen && distance < bestSeen) bestSeen = distance, sx = x, sy = y, mask = seen;
+        if (ours && distance < bestOurs) bestOurs = distance, oursX = x, oursY = y, oursMask = ours;
+        if (d[0] == 0 && d[1] == 0 && seen) break;
+      }
+      if (!mask) sx = oursX, sy = oursY, mask = oursMask;
+      if (!mask) continue;
+      const glm::dvec2 f = glm::clamp(q - glm::dvec2(sx, sy), 0.0, 1.0);
+      int fx = int(std::lround(f.x * 16.0)), fy = int(std::lround(f.y * 16.0));
+      // All the weight on the far column (or row), or the near one outside the atlas: the
+      // square one further on, its near corners those, with the same values.
+      if (fx == 16 || sx < 0) ++sx, fx = 0, mask = uint8_t((mask >> 1) & 0x5u);
+      if (fy == 16 || sy < 0) ++sy, fy = 0, mask = uint8_t((mask >> 2) & 0x3u);
+      if (!mask || sx < 0 || sy < 0) continue;
+      runtime::IndirectCorners& c = corners[t];
+      c.x = uint16_t(sx);
+      c.y = uint16_t(sy);
+      c.atlas = uint8_t(where.atlas);
+      c.fraction = uint8_t(fx | (fy << 4));
+      c.mask = mask;
+    }
+    progress.advance(end - begin);
+  }, 1024);
+  progress.end();
+  return corners;
+}
+
+}  // namespace afterglow::baker

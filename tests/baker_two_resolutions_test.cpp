@@ -1,0 +1,171 @@
+// Two resolutions (issue 29): bounced light solved on an indirect grid, the lightmap's charts
+// repacked coarser (uv/indirect.h), each source's direct light kept per lightmap texel
+// (runtime/lightmap_layers.h).
+//   - The grid: no indirect texel is shared by two charts (bilinear reads never mix them), each
+//     chart is the lightmap's turned and scaled as a whole, at the density asked for.
+//   - The direct light is the one-resolution bake's, texel for texel, to half precision: the
+//     lightmap keeps it sharp whatever the grid.
+//   - Every valid lightmap texel reads bounced light from the grid (no black texel), and the
+//     bounced light agrees with the one-resolution bake's on average.
+//   - The runtime's composition is the bake's, bit for bit.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "afterglow/baker/bake.h"
+#include "afterglow/runtime/runtime.h"
+#include "afterglow/scenes/procedural.h"
+#include "afterglow/uv/indirect.h"
+#include "afterglow/uv/metrics.h"
+#include "bake_fixtures.h"
+
+namespace afterglow::baker {
+namespace {
+
+// The built-in Cornell box at `fine` texels per metre; with `indirect` > 0 also an indirect
+// grid at that density.
+scenes::Scene cornellAt(float fine, float indirect) {
+  scenes::Scene scene = scenes::makeCornellBox();
+  unwrapAt(scene, fine);
+  uv::clearIndirect(scene);
+  if (indirect > 0.0f) {
+    Result<uv::IndirectLayout> packed = uv::packIndirect(scene, indirect);
+    EXPECT_TRUE(packed) << packed.message();
+  }
+  return scene;
+}
+
+// The scene as if its indirect UVs were its lightmap UVs, for the metrics.
+scenes::Scene asLightmap(const scenes::Scene& scene) {
+  scenes::Scene copy = scene;
+  for (scenes::Mesh& mesh : copy.meshes)
+    for (scenes::Primitive& prim : mesh.primitives) prim.uv1 = prim.indirectUv;
+  for (scenes::Instance& inst : copy.instances) inst.lightmap = inst.indirectLightmap;
+  return copy;
+}
+
+TEST(TwoResolutions, IndirectChartsArePackedApartAndScaledAsAWhole) {
+  const float fine = 200.0f, indirect = 50.0f;
+  const scenes::Scene scene = cornellAt(fine, indirect);
+  const uv::Metrics grid = uv::computeMetrics(asLightmap(scene), 0);
+  std::printf("indirect grid: %zu texels covered, %zu shared by two charts\n",
+              grid.atlases.empty() ? size_t(0) : grid.atlases[0].coveredTexels,
+              grid.overlappingTexels);
+  EXPECT_EQ(grid.overlappingTexels, 0u);
+
+  // Every triangle's edges scale by the same factor from lightmap to indirect texels (a chart
+  // moves as a whole: turned, scaled, shifted), the ratio of the densities.
+  double worst = 0.0;
+  size_t edges = 0;
+  for (const scenes::Instance& inst : scene.instances) {
+    if (inst.lightmap.atlas < 0) continue;
+    ASSERT_GE(inst.indirectLightmap.atlas, 0) << inst.name;
+    const glm::dvec2 fineSize(inst.lightmap.width, inst.lightmap.height);
+    const glm::dvec2 coarseSize(inst.indirectLightmap.width, inst.indirectLightmap.height);
+    for (const scenes::Primitive& prim : scene.meshes[size_t(inst.mesh)].primitives) {
+      ASSERT_EQ(prim.indirectUv.size(), prim.uv1.size());
+      for (size_t i = 0; i + 2 < prim.indices.size(); i += 3)
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t a = prim.indices[i + size_t(k)], b = prim.indices[i + size_t(k + 1) % 3];
+          const double from = glm::length((glm::dvec2(prim.uv1[b]) - glm::dvec2(prim.uv1[a])) * fineSize);
+          const double to =
+              glm::length((glm::dvec2(prim.indirectUv[b]) - glm::dvec2(prim.indirectUv[a])) * coarseSize);
+          if (from < 1.0) continue;  // too short to measure a ratio on
+          worst = std::max(worst, std::abs(to / from - double(indirect / fine)) / double(indirect / fine));
+          ++edges;
+        }
+    }
+  }
+  std::printf("%zu edges: largest departure from the density ratio %.3f%%\n", edges, 100.0 * worst);
+  EXPECT_GE(edges, 90u);  // the box's every edge
+  EXPECT_LE(worst, 0.02);  // the unwrap's own stretch between the chart and its average
+}
+
+struct Pair {
+  scenes::Scene oneScene, twoScene;
+  BakeResult one, two;
+};
+
+const Pair& cornellPair() {
+  static const Pair* pair = [] {
+    auto* p = new Pair;
+    BakeOptions o = bakePreset(Quality::Draft);
+    p->oneScene = cornellAt(60.0f, 0.0f);
+    p->twoScene = cornellAt(60.0f, 20.0f);
+    p->one = bakeOrDie(p->oneScene, o);
+    p->two = bakeOrDie(p->twoScene, o);
+    return p;
+  }();
+  return *pair;
+}
+
+TEST(TwoResolutions, DirectLightIsTheOneResolutionBakesToHalfPrecision) {
+  const Pair& p = cornellPair();
+  ASSERT_TRUE(p.two.transport.lightmap.active());
+  ASSERT_FALSE(p.one.transport.lightmap.active());
+  ASSERT_EQ(p.one.texels.size(), p.two.texels.size());
+  ASSERT_LT(p.two.transport.texelCount, p.one.texels.size() / 4);
+  float largest = 0.0f;
+  for (const glm::vec3& d : p.one.texelDirect) largest = std::max(largest, d.x);
+  // The same texels, the same shadow rays (seeded by lightmap texel): only the halves differ.
+  // The sky is none, so the direct light is the sources' alone in both.
+  size_t compared = 0;
+  double worst = 0.0;
+  for (uint32_t t = 0; t < p.one.texels.size(); ++t) {
+    if (!p.one.texels.valid[t] || !p.two.texels.valid[t]) continue;
+    ++compared;
+    worst = std::max(worst, double(std::abs(p.two.texelDirect[t].x - p.one.texelDirect[t].x)));
+  }
+  std::printf("%zu texels: direct light differs by at most %.2e of the brightest\n", compared,
+              worst / double(largest));
+  EXPECT_GT(compared, p.one.texels.size() / 2);
+  EXPECT_LE(worst, double(largest) * 1.0 / 2048.0);
+}
+
+TEST(TwoResolutions, EveryLightmapTexelReadsBouncedLightFromTheGrid) {
+  const Pair& p = cornellPair();
+  const runtime::TransportData& tr = p.two.transport;
+  size_t valid = 0, dark = 0;
+  double sumOne = 0.0, sumTwo = 0.0;
+  for (uint32_t t = 0; t < p.two.texels.size(); ++t) {
+    if (!p.two.texels.valid[t]) continue;
+    ++valid;
+    uint32_t texel[4];
+    float weight[4];
+    runtime::cornerWeights(tr.lightmap.corners[t], tr.atlases, texel, weight);
+    float total = 0.0f;
+    for (float w : weight) total += w;
+    if (!(std::abs(total - 1.0f) < 1e-5f) || !(p.two.texelIndirect[t].x > 0.0f)) ++dark;
+    if (p.one.texels.valid[t]) sumOne += p.one.texelIndirect[t].x, sumTwo += p.two.texelIndirect[t].x;
+  }
+  std::printf("%zu valid texels, %zu without bounced light; mean bounced light %+.2f%% of the "
+              "one-resolution bake's\n",
+              valid, dark, 100.0 * (sumTwo / sumOne - 1.0));
+  EXPECT_EQ(dark, 0u);
+  EXPECT_LE(std::abs(sumTwo / sumOne - 1.0), 0.03);
+}
+
+TEST(TwoResolutions, TheRuntimeComposesTheBakesLightmapsBitForBit) {
+  const Pair& p = cornellPair();
+  std::string error;
+  std::unique_ptr<runtime::Runtime> rt = runtime::Runtime::fromData(p.two.transport, &error);
+  ASSERT_TRUE(rt) << error;
+  runtime::UpdateOptions update;
+  update.fromScratch = true;
+  rt->update(update);
+  ASSERT_EQ(size_t(rt->atlasCount()), p.two.lightmaps.size());
+  ASSERT_EQ(size_t(rt->texelCount()), p.two.texels.size());
+  size_t differing = 0;
+  for (int a = 0; a < rt->atlasCount(); ++a) {
+    std::vector<glm::vec3> image;
+    ASSERT_TRUE(rt->readAtlas(a, image));
+    ASSERT_EQ(image.size(), p.two.lightmaps[size_t(a)].size());
+    for (size_t i = 0; i < image.size(); ++i) differing += image[i] != p.two.lightmaps[size_t(a)][i];
+  }
+  EXPECT_EQ(differing, 0u);
+}
+
+}  // namespace
+}  // namespace afterglow::baker
