@@ -158,8 +158,8 @@ Status traceDirect(Bake& b) {
   tr.lightmap.corners =
       indirectCorners(b.scene, *b.tracer, lightmap, b.result.indirectTexels, b.progress);
   if (b.progress.cancelled()) return Status::error("cancelled");
-  // A texel with no grid texel of its own around it sits where the grid found everything
-  // buried (a gap the gather's rays saw closed): buried too, the lightmap fills it.
+  // A texel with no grid texel of its instance anywhere near sits where the grid found
+  // everything buried: buried too, the lightmap fills it from its neighbours.
   for (uint32_t t = 0; t < lightmap.size(); ++t)
     if (tr.lightmap.corners[t].mask == 0) lightmap.valid[t] = 0;
   return computeLightmapDirect(b.scene, *b.tracer, lightmap, b.options.direct, tr, b.progress);

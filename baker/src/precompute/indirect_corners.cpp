@@ -117,6 +117,9 @@ class CornerSearch {
   Pixel cache_[16];
 };
 
+// How far (grid texels) a texel whose 3 × 3 squares have no grid texel of its own looks.
+constexpr int kFarCorner = 3;
+
 // The squares tried when a point's own has no usable corner, nearest first.
 constexpr int kSquares[9][2] = {{0, 0},  {-1, 0}, {1, 0},  {0, -1}, {0, 1},
                                 {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
@@ -161,8 +164,22 @@ std::vector<runtime::IndirectCorners> indirectCorners(const scenes::Scene& scene
         if (d[0] == 0 && d[1] == 0 && seen) break;
       }
       if (!mask) sx = oursX, sy = oursY, mask = oursMask;
+      glm::dvec2 f = glm::clamp(q - glm::dvec2(sx, sy), 0.0, 1.0);
+      if (!mask) {
+        // A strip narrower than a grid texel (a moulding) whose grid samples all fell inside
+        // what it stands on: the nearest grid texel of its instance a few texels away stands in,
+        // alone (the square's first corner, all the weight).
+        double nearest = 1e30;
+        for (int y = by - kFarCorner; y <= by + 1 + kFarCorner; ++y)
+          for (int x = bx - kFarCorner; x <= bx + 1 + kFarCorner; ++x) {
+            const double d = glm::length(q - glm::dvec2(x, y));
+            if (d >= nearest ||
+                gridTexel(scene, lightmap, uint32_t(t), indirect, x, y) == runtime::kNoTexel)
+              continue;
+            nearest = d, sx = x, sy = y, mask = 1, f = glm::dvec2(0.0);
+          }
+      }
       if (!mask) continue;
-      const glm::dvec2 f = glm::clamp(q - glm::dvec2(sx, sy), 0.0, 1.0);
       int fx = int(std::lround(f.x * 16.0)), fy = int(std::lround(f.y * 16.0));
       // All the weight on the far column (or row), or the near one outside the atlas: the
       // square one further on, its near corners those, with the same values.
