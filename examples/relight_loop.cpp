@@ -6,7 +6,9 @@
 // each frame, composed in the engine's shader with the per-light direct layers (uploaded once)
 // and the light colours. --compose composes the lightmap on the CPU instead and uploads it.
 //
-//   relight_loop OUT/transport.agt [--frames N] [--light NAME] [--compose]
+// --no-probes leaves the light and reflection probes out of the frame.
+//
+//   relight_loop OUT/transport.agt [--frames N] [--light NAME] [--compose] [--no-probes]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -30,7 +32,8 @@ glm::vec3 hue(float h) {
 
 int usage() {
   std::fprintf(stderr,
-               "usage: relight_loop OUT/transport.agt [--frames N] [--light NAME] [--compose]\n");
+               "usage: relight_loop OUT/transport.agt [--frames N] [--light NAME] [--compose] "
+               "[--no-probes]\n");
   return 2;
 }
 
@@ -39,10 +42,12 @@ int usage() {
 int main(int argc, char** argv) {
   std::string path, lightName;
   int frames = 120;
-  bool compose = false;
+  bool compose = false, probes = true;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--compose") == 0) {
       compose = true;
+    } else if (std::strcmp(argv[i], "--no-probes") == 0) {
+      probes = false;
     } else if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
       frames = std::atoi(argv[++i]);
       if (frames <= 0) return usage();
@@ -98,7 +103,8 @@ int main(int argc, char** argv) {
   perFrame.composeLightmap = !layers;
   // One reflection probe capture pass a frame: a full round of a level's probes each frame
   // would cost a frame many times over (issue 28 made them the default).
-  perFrame.reflectionPasses = 1;
+  perFrame.reflectionPasses = probes ? 1 : 0;
+  perFrame.probes = probes;
   const glm::vec3 baseColor = rt->lightColor(light);
   const float brightness = std::max({baseColor.x, baseColor.y, baseColor.z, 1e-6f});
   std::vector<double> ms, lightmapMs;  // the whole update; its lightmaps' part (no probes)

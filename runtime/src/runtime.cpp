@@ -331,7 +331,11 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
   // Texel values as the bake computes them: direct (sky first, then sources) + indirect; with
   // two resolutions the grid's sum brought up to the lightmap's texels beside their direct light.
   const Clock::time_point outputStart = Clock::now();
-  if (dirty & kDirtyDirect) solver_->directTexels(direct_.data());
+  // With two resolutions the grid's direct light is its sky alone (the sources' is in the
+  // lightmap's layers), so a light or emission change leaves it.
+  const unsigned gridDirect = data_.lightmap.active() ? kDirtySky : kDirtyDirect;
+  if ((dirty & gridDirect) || firstUpdate_) solver_->directTexels(direct_.data());
+  firstUpdate_ = false;
   solver_->indirectTexels(indirect_.data());
   // resolveAtlas assign()s the image; at its full size already, that never reallocates.
   const int back = 1 - front_;  // front_ is written only here, under updateLock

@@ -316,6 +316,7 @@ class Runtime {
   std::vector<glm::vec3> grid_;
   std::vector<glm::vec3> lightmapDirect_;
   bool pendingLightmapDirect_ = true;  // lightmapDirect_ is behind the sources
+  bool firstUpdate_ = true;            // direct_ not computed yet
   double lastOutputMs_ = 0.0;        // texel output time of the last update (for the budget)
 
   // Double-buffered outputs: update() fills [1 - front_], then flips front_ under outputMutex_.
