@@ -114,7 +114,8 @@ int main(int argc, char** argv) {
     rt->setLightColor(light, brightness * hue(float(f % 120) / 120.0f));
     const afterglow::runtime::UpdateStats s = rt->update(perFrame);
     if (layers)
-      for (int a = 0; a < rt->indirectAtlasCount(); ++a) rt->readIndirectAtlas(a, gridUpload[size_t(a)]);
+      for (int a = 0; a < rt->indirectAtlasCount(); ++a)
+        rt->readIndirectAtlas(a, gridUpload[size_t(a)]);
     else
       for (int a = 0; a < rt->atlasCount(); ++a) rt->readAtlas(a, upload[size_t(a)].data());
     ms.push_back(s.milliseconds);

@@ -1,7 +1,7 @@
 // The default bake, and one with an indirect grid, against the reference path tracer on the
 // measured Cornell box of ../shared/scenes (McGuire's, its emissive ceiling lamp emitting
-// downwards only), unwrapped into one 256² atlas: relative RMSE ≤ 3% over valid texels and mean bias ≤ 1%, for direct and
-// for indirect light. The errors are per texel and relative to the texel's own value
+// downwards only), unwrapped into one 256² atlas: relative RMSE ≤ 3% over valid texels and mean
+// bias ≤ 1%, for direct and for indirect light (the grid's bounced light: below). The errors are per texel and relative to the texel's own value
 // (baker::compareToReference); the reference runs 32768 paths per texel over every 32nd valid
 // texel, so its own noise stays near 1% and cannot hide a real error.
 #include <cmath>

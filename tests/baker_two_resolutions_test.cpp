@@ -69,11 +69,12 @@ TEST(TwoResolutions, IndirectChartsArePackedApartAndScaledAsAWhole) {
       for (size_t i = 0; i + 2 < prim.indices.size(); i += 3)
         for (int k = 0; k < 3; ++k) {
           const uint32_t a = prim.indices[i + size_t(k)], b = prim.indices[i + size_t(k + 1) % 3];
-          const double from = glm::length((glm::dvec2(prim.uv1[b]) - glm::dvec2(prim.uv1[a])) * fineSize);
-          const double to =
-              glm::length((glm::dvec2(prim.indirectUv[b]) - glm::dvec2(prim.indirectUv[a])) * coarseSize);
+          const glm::dvec2 fineEdge = glm::dvec2(prim.uv1[b]) - glm::dvec2(prim.uv1[a]);
+          const glm::dvec2 gridEdge = glm::dvec2(prim.indirectUv[b]) - glm::dvec2(prim.indirectUv[a]);
+          const double from = glm::length(fineEdge * fineSize), to = glm::length(gridEdge * coarseSize);
           if (from < 1.0) continue;  // too short to measure a ratio on
-          worst = std::max(worst, std::abs(to / from - double(indirect / fine)) / double(indirect / fine));
+          const double ratio = double(indirect / fine);
+          worst = std::max(worst, std::abs(to / from - ratio) / ratio);
           ++edges;
         }
     }
@@ -138,7 +139,9 @@ TEST(TwoResolutions, EveryLightmapTexelReadsBouncedLightFromTheGrid) {
     float total = 0.0f;
     for (float w : weight) total += w;
     if (!(std::abs(total - 1.0f) < 1e-5f) || !(p.two.texelIndirect[t].x > 0.0f)) ++dark;
-    if (p.one.texels.valid[t]) sumOne += p.one.texelIndirect[t].x, sumTwo += p.two.texelIndirect[t].x;
+    if (!p.one.texels.valid[t]) continue;
+    sumOne += p.one.texelIndirect[t].x;
+    sumTwo += p.two.texelIndirect[t].x;
   }
   std::printf("%zu valid texels, %zu without bounced light; mean bounced light %+.2f%% of the "
               "one-resolution bake's\n",

@@ -396,7 +396,7 @@ void probesBesideBlocks(const std::string& path, float unitScale, const char* na
   // The probes' lights as the runtime and the bake folder have them (probe_lights.h), weighed
   // by visibility as the runtime weighs them (probe_visibility.h).
   const runtime::ProbeDirectionList directions =
-      runtime::probeLights(baked.transport, runtime::sourceScales(baked.transport));
+      runtime::probeLights(baked.transport, runtime::directScales(baked.transport));
   ASSERT_EQ(directions.count(), placed->positions.size());
   std::vector<glm::vec3> at, normals, probe, withDirections;
   int hint = 0;

@@ -63,7 +63,7 @@ Leak leakThroughTheWall(const scenes::Scene& scene, const std::vector<glm::vec3>
   const runtime::ProbeTransport& probes = baked.transport.probes;
   EXPECT_EQ(probes.depth.size(), probes.count() * runtime::kProbeDepthValues);
   const runtime::ProbeDirectionList directions =
-      runtime::probeLights(baked.transport, runtime::sourceScales(baked.transport));
+      runtime::probeLights(baked.transport, runtime::directScales(baked.transport));
   runtime::test::Rng rng{29};
   for (int i = 0; i < 40; ++i) {
     const glm::vec3 p(0.1f + 0.35f * rng.unit(), 0.3f + 2.4f * rng.unit(), -1.7f + 3.4f * rng.unit());

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <ctime>
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -632,10 +633,12 @@ TEST(GltfImport, LightsAndCamerasArePlacedInWorldSpace) {
   b.j["extensionsUsed"] = {"KHR_lights_punctual"};
   b.j["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
       {{{"name", "Sun"}, {"type", "directional"}, {"color", {1, 0.9, 0.8}}, {"intensity", 5},
-        {"extras", {{"afterglow", {{"angularDiameter", 0.02}, {"bounceIntensity", 2}}}}}},
+        {"extras", {{"afterglow", {{"angularDiameter", 0.02}, {"bounceIntensity", 2},
+                                   {"mode", "mixed"}}}}}},
        {{"type", "point"}, {"intensity", 100}, {"range", 7},
-        {"extras", {{"afterglow", {{"radius", 0.1}}}}}},
-       {{"type", "spot"}, {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.5}}}}});
+        {"extras", {{"afterglow", {{"radius", 0.1}, {"mode", "realtime"}}}}}},
+       {{"type", "spot"}, {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.5}}},
+        {"extras", {{"afterglow", {{"mode", "dynamic"}}}}}}});
   // Rotating -90° about X turns -Z into -Y: the sun shines straight down.
   b.node({{"name", "sunNode"}, {"rotation", {-h, 0, 0, h}},
           {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
@@ -656,6 +659,7 @@ TEST(GltfImport, LightsAndCamerasArePlacedInWorldSpace) {
   EXPECT_FLOAT_EQ(sun.intensity, 5.0f);
   EXPECT_FLOAT_EQ(sun.angularDiameter, 0.02f);
   EXPECT_FLOAT_EQ(sun.bounceIntensity, 2.0f);
+  EXPECT_EQ(sun.mode, LightMode::Mixed);
   EXPECT_EQ(sun.node, 0);
   const Light& point = r->lights[1];
   EXPECT_EQ(point.type, LightType::Point);
@@ -663,6 +667,7 @@ TEST(GltfImport, LightsAndCamerasArePlacedInWorldSpace) {
   EXPECT_FLOAT_EQ(point.range, 7.0f);
   EXPECT_FLOAT_EQ(point.radius, 0.1f);
   EXPECT_FLOAT_EQ(point.angularDiameter, 0.00925f);
+  EXPECT_EQ(point.mode, LightMode::Realtime);
   // The spot hangs under a parent rotated 90° about Y: -Z turns into -X.
   const Light& spot = r->lights[2];
   EXPECT_EQ(spot.type, LightType::Spot);
@@ -670,6 +675,11 @@ TEST(GltfImport, LightsAndCamerasArePlacedInWorldSpace) {
   expectVec(spot.direction, {-1, 0, 0});
   EXPECT_FLOAT_EQ(spot.innerConeAngle, 0.2f);
   EXPECT_FLOAT_EQ(spot.outerConeAngle, 0.5f);
+  // An unknown mode is baked, with a warning naming the light.
+  EXPECT_EQ(spot.mode, LightMode::Baked);
+  EXPECT_TRUE(std::any_of(r->warnings.begin(), r->warnings.end(), [](const std::string& w) {
+    return w.find("extras.afterglow.mode") != std::string::npos;
+  }));
   ASSERT_EQ(r->cameras.size(), 1u);
   EXPECT_TRUE(r->cameras[0].perspective);
   EXPECT_FLOAT_EQ(r->cameras[0].yfov, 0.5f);

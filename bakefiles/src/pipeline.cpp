@@ -304,7 +304,7 @@ Result<std::vector<std::string>> writeBakeFolder(const scenes::Scene& scene,
   if (!level.result.probeSh.empty())
     if (Status st = writeLightProbes(outDir, level.probes, level.result.probeSh,
                                      runtime::probeLights(level.result.transport,
-                                                          runtime::sourceScales(level.result.transport)),
+                                                          runtime::directScales(level.result.transport)),
                                      level.result.transport.probes.depth,
                                      level.probeDering, level.report.settings, out,
                                      written.value());

@@ -285,7 +285,8 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
           {"lightmapTexels", tr.lightmap.texelCount},
           // Each source's direct light, a half float a texel; where each texel reads the grid.
           {"directBytesPerTexelPerSource",
-           sources == 0 ? 0.0 : double(tr.lightmap.directBytes()) / lightmapTexels / double(sources)},
+           sources == 0 ? 0.0
+                        : double(tr.lightmap.directBytes()) / lightmapTexels / double(sources)},
           {"cornerBytesPerTexel", double(sizeof(runtime::IndirectCorners))},
           {"atlasBytes", layers - tr.lightmap.directBytes() -
                              tr.lightmap.corners.size() * sizeof(runtime::IndirectCorners)}};

@@ -53,6 +53,7 @@ void applyLightSettings(const scenes::Scene& scene, runtime::TransportData& tr) 
     s.color = l.color;
     s.intensity = l.intensity;
     s.bounceIntensity = l.bounceIntensity;
+    s.mode = lightMode(l.mode);
   };
   if (lights.size() == scene.lights.size()) {
     for (size_t i = 0; i < lights.size(); ++i) apply(*lights[i], scene.lights[i]);

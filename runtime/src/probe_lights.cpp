@@ -42,9 +42,9 @@ glm::vec3 lightCorrectionOverPi(const ProbeDirection& light, glm::vec3 normal, f
   return light.power * ((std::max(c, 0.0f) - sh) / kPi);
 }
 
-std::vector<glm::vec3> sourceScales(const TransportData& data) {
+std::vector<glm::vec3> directScales(const TransportData& data) {
   std::vector<glm::vec3> out;
-  for (const Source& s : data.sources) out.push_back(sourceScale(data, s));
+  for (const Source& s : data.sources) out.push_back(directScale(data, s));
   return out;
 }
 

@@ -396,7 +396,7 @@ void Runtime::publishProbes() {
   std::copy(probeWork_.begin(), probeWork_.end(), probes_[back].begin());
   // The directions depend on the sources' scales alone: a budgeted refresh under unchanged
   // lights (most calls) keeps the buffer's.
-  const std::vector<glm::vec3>& scales = solver_->sourceScales();
+  const std::vector<glm::vec3>& scales = solver_->directScales();
   if (!probeLightsValid_[back] || probeLightScales_[back] != scales) {
     runtime::probeLights(data_, scales, probeLights_[back]);
     probeLightScales_[back].assign(scales.begin(), scales.end());

@@ -111,6 +111,7 @@ Solver::Solver(const TransportData& data) : data_(data) {
   scratch_.assign(data.gatherPointCount, glm::vec4(0.0f));
   blockChange_.assign((clusters + kBlock - 1) / kBlock, 0.0f);
   sourceScale_.resize(data.sources.size());
+  directScale_.resize(data.sources.size());
   // The probes' region weights, paired (probeBounceGeneric); an odd last region pairs with
   // zeros.
   const uint32_t bins = data.probes.bins;
@@ -138,7 +139,10 @@ Solver::Solver(const TransportData& data) : data_(data) {
 
 void Solver::prepare() {
   const uint32_t n = data_.clusterCount;
-  for (size_t i = 0; i < data_.sources.size(); ++i) sourceScale_[i] = sourceScale(data_, data_.sources[i]);
+  for (size_t i = 0; i < data_.sources.size(); ++i) {
+    sourceScale_[i] = sourceScale(data_, data_.sources[i]);
+    directScale_[i] = directScale(data_, data_.sources[i]);
+  }
   for (uint32_t c = 0; c < n; ++c) {
     const MaterialParams& m = data_.materials[data_.clusterMaterial[c]];
     albedo_[c] = boostAlbedo(m.albedo * data_.clusterAlbedoTexture[c], data_.albedoBoost);
@@ -407,7 +411,7 @@ void Solver::probeRadiance(size_t first, size_t count, ShL2* out) const {
         sh[i] = _mm_mul_ps(_mm_loadu_ps(&acc[i].x), _mm_set1_ps(indirect));
       for (size_t s = 0; s < data_.sources.size(); ++s) {
         const std::vector<float>& transfer = data_.sources[s].probeTransfer;
-        const glm::vec3 scale = sourceScale_[s];
+        const glm::vec3 scale = directScale_[s];
         if (transfer.empty() || scale == glm::vec3(0.0f)) continue;
         const __m128 scale4 = _mm_setr_ps(scale.x, scale.y, scale.z, 0.0f);
         const float* t = &transfer[p * kShCount];
@@ -435,7 +439,7 @@ void Solver::probeRadiance(size_t first, size_t count, ShL2* out) const {
       for (int i = 0; i < kShCount; ++i) sh.c[i] = indirect * glm::vec3(acc[i]);
       for (size_t s = 0; s < data_.sources.size(); ++s) {
         const std::vector<float>& transfer = data_.sources[s].probeTransfer;
-        const glm::vec3 scale = sourceScale_[s];
+        const glm::vec3 scale = directScale_[s];
         if (transfer.empty() || scale == glm::vec3(0.0f)) continue;
         for (int i = 0; i < kShCount; ++i) sh.c[i] += scale * transfer[p * kShCount + size_t(i)];
       }
@@ -522,7 +526,7 @@ void Solver::directTexels(glm::vec3* direct, bool withSky) const {
     if (!withSky) std::fill(direct + first, direct + last, glm::vec3(0.0f));
     for (size_t i = 0; i < data_.sources.size(); ++i) {
       const std::vector<float>& transfer = data_.sources[i].texelTransfer;
-      const glm::vec3 scale = sourceScale_[i];
+      const glm::vec3 scale = directScale_[i];
       if (transfer.empty() || scale == glm::vec3(0.0f)) continue;
       for (size_t t = first; t < last; ++t) direct[t] += scale * transfer[t];
     }
@@ -556,7 +560,7 @@ void Solver::lightmapDirect(glm::vec3* direct) const {
     std::fill(direct + first, direct + last, glm::vec3(0.0f));
     for (size_t i = 0; i < data_.sources.size(); ++i) {
       const std::vector<uint16_t>& halves = layers.direct[i];
-      const glm::vec3 scale = sourceScale_[i] * layers.directScale[i];
+      const glm::vec3 scale = directScale_[i] * layers.directScale[i];
       if (halves.empty() || scale == glm::vec3(0.0f)) continue;
       for (size_t t = first; t < last; ++t) direct[t] += scale * halfToFloat(halves[t]);
     }

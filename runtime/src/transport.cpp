@@ -143,6 +143,10 @@ glm::vec3 sourceScale(const TransportData& data, const Source& s) {
   return s.color * s.intensity;
 }
 
+glm::vec3 directScale(const TransportData& data, const Source& s) {
+  return s.mode == LightMode::Baked ? sourceScale(data, s) : glm::vec3(0.0f);
+}
+
 namespace {
 
 // Checks a row-compressed matrix's shape: rows+1 ascending offsets ending at the entry count,

@@ -192,7 +192,8 @@ const SectionWriter kWriters[] = {
          o.string(s.name);
          o.scalar(uint8_t(s.kind));
          o.scalar(uint8_t(s.enabled ? 1 : 0));
-         o.scalar(uint16_t(0));
+         o.scalar(uint8_t(s.mode));
+         o.scalar(uint8_t(0));
          o.scalar(s.material);
          o.vec3(s.color);
          o.scalar(s.intensity);
@@ -432,16 +433,18 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
     d.sources.resize(size_t(count));
     for (uint64_t i = 0; i < count; ++i) {
       Source& s = d.sources[size_t(i)];
-      uint8_t kind = 0, enabled = 0;
-      uint16_t reserved = 0;
+      uint8_t kind = 0, enabled = 0, mode = 0, reserved = 0;
       const bool ok = in.string(s.name, "name") && in.scalar(kind, "kind") &&
-                      in.scalar(enabled, "enabled") && in.scalar(reserved, "reserved") &&
+                      in.scalar(enabled, "enabled") && in.scalar(mode, "mode") &&
+                      in.scalar(reserved, "reserved") &&
                       in.scalar(s.material, "material") && in.vec3(s.color, "colour") &&
                       in.scalar(s.intensity, "intensity") &&
                       in.scalar(s.bounceIntensity, "bounce intensity") &&
                       (kind <= uint8_t(SourceKind::Emissive) ||
                        in.fail("unknown kind " + std::to_string(kind))) &&
                       (enabled <= 1 || in.fail("enabled is " + std::to_string(enabled))) &&
+                      (mode <= uint8_t(LightMode::Realtime) ||
+                       in.fail("unknown light mode " + std::to_string(mode))) &&
                       in.array(s.texelTransfer, "texel transfer") &&
                       in.array(s.clusterTransfer, "cluster transfer") &&
                       in.array(s.probeTransfer, "probe transfer");
@@ -451,6 +454,7 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
       }
       s.kind = SourceKind(kind);
       s.enabled = enabled != 0;
+      s.mode = LightMode(mode);
     }
     return true;
   }

@@ -1385,6 +1385,14 @@ class Importer {
       number("radius", light.radius);
       number("angularDiameter", light.angularDiameter);
       number("bounceIntensity", light.bounceIntensity);
+      if (const tinygltf::Value* mode = member(*ag, "mode")) {
+        const std::string m = mode->IsString() ? mode->Get<std::string>() : std::string();
+        if (m == "baked") light.mode = LightMode::Baked;
+        else if (m == "mixed") light.mode = LightMode::Mixed;
+        else if (m == "realtime") light.mode = LightMode::Realtime;
+        else warn(lightWhere + ": extras.afterglow.mode is not \"baked\", \"mixed\" or "
+                  "\"realtime\", baked used");
+      }
     }
     scene_.lights.push_back(std::move(light));
   }

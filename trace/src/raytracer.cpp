@@ -800,7 +800,8 @@ const glm::vec2* RayTracer::lightmapUvs(const Hit& hit) const {
 glm::vec2 RayTracer::uv(const Hit& hit, int set) const {
   if (!hit.valid()) return glm::vec2(0.0f);
   const Geometry& g = impl_->geometries[hit.geometry];
-  if (set == 1 && !g.lightmapUv.empty() && impl_->options.lightmapUvSet == scenes::LightmapUvSet::Lightmap)
+  if (set == 1 && !g.lightmapUv.empty() &&
+      impl_->options.lightmapUvSet == scenes::LightmapUvSet::Lightmap)
     return mixCorners(&g.lightmapUv[3 * size_t(hit.triangle)], hit);
   const std::vector<glm::vec2>* uvs = set == 0   ? &g.source->uv0
                                       : set == 1 ? &g.source->uv1

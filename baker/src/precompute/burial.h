@@ -18,10 +18,10 @@ namespace afterglow::baker {
 bool litCavity(const trace::RayTracer& tracer, const TexelSet& texels, uint32_t t);
 
 // Two resolutions: the gather finds the indirect grid's buried texels with its own rays; the
-// lightmap's texels cast none, so those near other geometry (TexelSet::nearGeometry) or whose
-// 2×2 indirect texels are not all valid texels of their instance (an object standing on them,
-// a chart's edge) cast kBurialRays cosine rays here and are judged by the gather's rule (LinkOptions::maxBackfaceFraction,
-// maxEnclosedFraction). Marks them invalid in `lightmap`; returns how many.
+// lightmap's texels cast none, so those near other geometry (TexelSet::nearGeometry) or next to
+// a grid texel the gather buried (an object standing on them) cast kBurialRays cosine rays here
+// and are judged by the gather's rule (LinkOptions::maxBackfaceFraction, maxEnclosedFraction).
+// Marks them invalid in `lightmap`; returns how many.
 constexpr int kBurialRays = 16;
 size_t buryLightmapTexels(const scenes::Scene& scene, const trace::RayTracer& tracer,
                           TexelSet& lightmap, const TexelSet& indirect,

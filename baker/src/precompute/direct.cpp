@@ -409,6 +409,7 @@ Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
     s.color = light.color;
     s.intensity = light.intensity;
     s.bounceIntensity = light.bounceIntensity;
+    s.mode = lightMode(light.mode);
     transport.sources.push_back(std::move(s));
   }
   for (const Emitter& e : emitters) {

@@ -39,7 +39,8 @@ bool indirectPoint(const scenes::Scene& scene, const TexelSet& texels, uint32_t 
   const int j = (i + 1) % 3;
   const glm::dvec2 from = a[j] - a[i], to = b[j] - b[i];
   const double norm = glm::dot(from, from);
-  const glm::dvec2 w((to.x * from.x + to.y * from.y) / norm, (to.y * from.x - to.x * from.y) / norm);
+  const glm::dvec2 w((to.x * from.x + to.y * from.y) / norm,
+                     (to.y * from.x - to.x * from.y) / norm);
   const glm::dvec2 z = glm::dvec2(texels.pixel[t]) + 0.5 - a[i];
   out = b[i] + glm::dvec2(w.x * z.x - w.y * z.y, w.x * z.y + w.y * z.x);
   return std::isfinite(out.x) && std::isfinite(out.y);

@@ -454,7 +454,8 @@ uint32_t texelAt(const scenes::Scene& scene, const TexelSet& texels, uint32_t in
 uint32_t texelAtUv(const scenes::Scene& scene, const TexelSet& texels, uint32_t instance,
                    glm::vec2 uv1) {
   if (instance >= scene.instances.size()) return kNoTexel;
-  const scenes::LightmapLocation& where = scenes::lightmapOf(scene.instances[instance], texels.uvSet);
+  const scenes::LightmapLocation& where =
+      scenes::lightmapOf(scene.instances[instance], texels.uvSet);
   if (where.atlas < 0 || size_t(where.atlas) >= texels.atlases.size()) return kNoTexel;
   const runtime::AtlasLayout& layout = texels.atlases[size_t(where.atlas)];
   const glm::vec2 pixel = uv1 * glm::vec2(layout.width, layout.height);

@@ -17,6 +17,13 @@ class RayTracer;
 
 namespace afterglow::baker {
 
+// The runtime's light mode of a scene light's.
+inline runtime::LightMode lightMode(scenes::LightMode mode) {
+  return mode == scenes::LightMode::Mixed      ? runtime::LightMode::Mixed
+         : mode == scenes::LightMode::Realtime ? runtime::LightMode::Realtime
+                                               : runtime::LightMode::Baked;
+}
+
 Status computeDirect(const scenes::Scene& scene, const trace::RayTracer& tracer,
                      const TexelSet& texels, const Clusters& clusters,
                      const DirectOptions& options, runtime::TransportData& transport,

@@ -58,14 +58,14 @@ struct ProbeDirectionList {
 };
 // The lights of the transport's probes with the sources' scales (sourceScale per source, the
 // transport's order), the same scales their SH were solved with.
-ProbeDirectionList probeLights(const TransportData& data, const std::vector<glm::vec3>& sourceScales);
+ProbeDirectionList probeLights(const TransportData& data, const std::vector<glm::vec3>& directScales);
 // The same into `out`, reusing its memory: no allocation once it holds probeLightCapacity.
-void probeLights(const TransportData& data, const std::vector<glm::vec3>& sourceScales,
+void probeLights(const TransportData& data, const std::vector<glm::vec3>& directScales,
                  ProbeDirectionList& out);
 // The most directions the transport's probes can have (one per probe and source).
 size_t probeLightCapacity(const TransportData& data);
-// sourceScale() of every source as the transport holds them.
-std::vector<glm::vec3> sourceScales(const TransportData& data);
+// directScale() of every source as the transport holds them.
+std::vector<glm::vec3> directScales(const TransportData& data);
 
 // A probe's (or an interpolated point's) light: its SH and its lights.
 struct ProbeLighting {

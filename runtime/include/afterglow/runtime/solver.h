@@ -87,8 +87,9 @@ class Solver {
   // rows gathered), into out[0 .. count). Probes out of range are left out.
   void probeRadiance(size_t first, size_t count, ShL2* out) const;
   size_t probeCount() const { return data_.probes.count(); }
-  // Per source, what its unit transfer is multiplied by now (sourceScale).
-  const std::vector<glm::vec3>& sourceScales() const { return sourceScale_; }
+  // Per source, what its unit direct light in lightmaps and probes is multiplied by now
+  // (directScale: 0 for mixed and realtime lights).
+  const std::vector<glm::vec3>& directScales() const { return directScale_; }
 
   const std::vector<glm::vec3>& clusterReflected() const { return reflected_; }
   const std::vector<glm::vec3>& clusterAlbedo() const { return albedo_; }
@@ -126,6 +127,7 @@ class Solver {
   mutable std::vector<glm::vec4> filtered_; // smoothing passes over the gather points
   mutable std::vector<glm::vec4> scratch_;
   std::vector<glm::vec3> sourceScale_;      // per source: colour × intensity (or emission)
+  std::vector<glm::vec3> directScale_;      // ... in texels and probes (directScale)
   std::vector<glm::vec4> probeBinSh_;       // the probes' region weights, laid out for
                                             //   probeBounce_ (solver.cpp)
   // One probe's bounced light (the kernel the CPU runs best, picked at construction), with the

@@ -124,6 +124,11 @@ SparseMatrix normalisedRows(size_t count, const NormalisedRowFill& fill,
 // emissive surfaces of one material (area light, sampled explicitly by the baker).
 enum class SourceKind : uint8_t { Light, Emissive };
 
+// How a light's direct light is baked (Unity's light modes): Baked into the lightmaps and the
+// light probes; Mixed and Realtime left to the engine, which lights with them itself: only their
+// bounced light is baked (bounceIntensity applies as ever).
+enum class LightMode : uint8_t { Baked, Mixed, Realtime };
+
 struct Source {
   std::string name;      // light name, or material name for emissive sources
   SourceKind kind = SourceKind::Light;
@@ -133,6 +138,7 @@ struct Source {
   float intensity = 1.0f;        // lux or candela, as in glTF
   float bounceIntensity = 1.0f;  // scales this light in bounced light only (Unity's meaning)
   bool enabled = true;
+  LightMode mode = LightMode::Baked;  // emissive sources are always baked
   // Unit transfer (E/π per unit source), dense over texels and over clusters.
   std::vector<float> texelTransfer;
   std::vector<float> clusterTransfer;
@@ -330,6 +336,9 @@ struct TransportData {
 // What a source's unit transfer is multiplied by as set now: its colour × intensity (a light)
 // or its material's emission (emissive surfaces); 0 when disabled.
 glm::vec3 sourceScale(const TransportData& data, const Source& source);
+// What its direct light in the lightmaps and light probes is multiplied by: sourceScale for a
+// baked source, 0 for a mixed or realtime light (the engine adds that light itself).
+glm::vec3 directScale(const TransportData& data, const Source& source);
 
 // texelGather and pointFilter (smoothing only with filterPasses > 0) from texelPoint,
 // texelNeighbours and the atlases: a texel mixes its own gather point (weight 4) with those of

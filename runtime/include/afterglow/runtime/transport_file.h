@@ -34,7 +34,7 @@
 //         u32 mixPixel, u32 mixStart, u32 mixTexel, f32 mixWeight
 //   MATL  count = materials; per material: string name, vec3 albedo, vec3 emission
 //   SRCS  count = sources; per source: string name, u8 kind (0 light, 1 emissive),
-//         u8 enabled (0/1), u16 0, u32 material, vec3 color, f32 intensity,
+//         u8 enabled (0/1), u8 light mode (0 baked, 1 mixed, 2 realtime), u8 0, u32 material, vec3 color, f32 intensity,
 //         f32 bounceIntensity, arrays f32 texelTransfer, f32 clusterTransfer,
 //         f32 probeTransfer (probes × 9: the radiance SH the source sends each probe directly)
 //   CLUS  count = clusters: arrays u32 clusterMaterial, vec3 clusterAlbedoTexture,

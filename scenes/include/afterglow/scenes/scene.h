@@ -149,6 +149,11 @@ struct Instance {
 
 enum class LightType { Directional, Point, Spot };
 
+// How a light's direct light is baked (Unity's light modes, extras.afterglow.mode): into the
+// lightmaps and probes (baked); or left to the engine, its bounced light baked (realtime; mixed
+// too, whose static shadow is meant for a shadowmask).
+enum class LightMode { Baked, Mixed, Realtime };
+
 // KHR_lights_punctual, placed in the world.
 struct Light {
   std::string name;
@@ -165,6 +170,7 @@ struct Light {
   float radius = 0.0f;              // "radius", metres: soft shadows for point and spot lights
   float angularDiameter = 0.00925f; // "angularDiameter", radians (the sun's 0.53°): directional
   float bounceIntensity = 1.0f;     // "bounceIntensity": scales this light in bounced light only
+  LightMode mode = LightMode::Baked;  // "mode": "baked", "mixed" or "realtime"
 };
 
 struct Camera {
