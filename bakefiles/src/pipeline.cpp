@@ -160,6 +160,19 @@ Result<UnwrapStep> unwrapForBake(scenes::Scene& scene, BakeJob& job, Progress& p
   job.unwrap.pack.texelsPerUnit = texelsPerUnit;
   Result<uv::UnwrapResult> unwrapped = uv::unwrap(scene, job.unwrap, progress);
   if (progress.cancelled()) return Status::error("cancelled");
+  // An instance larger than one atlas at the density asked for (Sponza's walls at 32 texels/m)
+  // gets atlases of up to kLargeAtlas instead of a refusal, unless the atlas size was given.
+  // Packing fails before it changes the scene, so the second try starts from the same one.
+  if (!unwrapped && job.atlasSize == 0 && job.unwrap.mode == uv::UvMode::Generate &&
+      job.unwrap.pack.maxAtlasSize < kLargeAtlas) {
+    const std::string first = unwrapped.message();
+    job.unwrap.pack.maxAtlasSize = kLargeAtlas;
+    unwrapped = uv::unwrap(scene, job.unwrap, progress);
+    if (progress.cancelled()) return Status::error("cancelled");
+    if (unwrapped)
+      unwrapped->warnings.push_back(format("%s; atlases of up to %d texels used instead",
+                                           first.c_str(), kLargeAtlas));
+  }
   if (!unwrapped) return unwrapped.status();
   step.texelsPerUnit = texelsPerUnit;
   step.warnings = unwrapped->warnings;

@@ -23,6 +23,9 @@ namespace afterglow::bakefiles {
 
 // `--texels-per-unit auto`: about a 512² atlas's worth of texels, whatever the level's scale.
 constexpr double kAutoTexels = 512.0 * 512.0;
+// Atlases grow to this size when an instance does not fit the usual 4,096 (engines take
+// 8,192² textures; OpenEXR and the runtime do not mind).
+constexpr int kLargeAtlas = 8192;
 // `--indirect-texels-per-unit auto`: bounced light on an indirect grid of about
 // kAutoIndirectTexels texels (uv/indirect.h) when that is at most half the lightmap's density
 // (a quarter of its texels), else at the lightmap's own texels (so the default density,
