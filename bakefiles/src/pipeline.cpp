@@ -116,8 +116,8 @@ Status chooseIndirect(scenes::Scene& scene, const BakeJob& job, UnwrapStep& step
   } else {
     density = roundDensity(uv::texelsPerUnitFor(scene, kAutoIndirectTexels));
     if (!(2.0f * density <= step.texelsPerUnit)) {
-      step.indirectChoice = format("auto: a grid of %.0fk texels would not be a quarter of the "
-                                   "lightmap's, bounced light at its texels",
+      step.indirectChoice = format("auto: the lightmap is not twice as dense as a grid of about "
+                                   "%.0fk texels would be, bounced light at its texels",
                                    kAutoIndirectTexels / 1000.0);
       uv::clearIndirect(scene);
       return Status::ok();
