@@ -119,9 +119,10 @@ int main(int argc, char** argv) {
     else
       for (int a = 0; a < rt->atlasCount(); ++a) rt->readAtlas(a, upload[size_t(a)].data());
     ms.push_back(s.milliseconds);
-    std::printf("frame %4d  update %8.3f ms  (compose %.3f ms, light probes %.3f ms, reflection "
-                "%.3f ms)  change %.2e\n",
-                f, s.milliseconds, s.composeMilliseconds, s.probeMilliseconds,
+    std::printf("frame %4d  update %7.3f ms  (light change %.3f, bounce %.3f, atlases %.3f of which "
+                "compose %.3f, light probes %.3f, reflection %.3f ms)  change %.2e\n",
+                f, s.milliseconds, s.prepareMilliseconds, s.bounceMilliseconds,
+                s.outputMilliseconds, s.composeMilliseconds, s.probeMilliseconds,
                 s.reflectionMilliseconds, double(s.change));
     lightmapMs.push_back(s.milliseconds - s.probeMilliseconds - s.reflectionMilliseconds);
   }

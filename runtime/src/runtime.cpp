@@ -58,7 +58,6 @@ Runtime::Runtime(TransportData data) : data_(std::move(data)) {
   dirty_ = kDirtyDirect;
 
   direct_.assign(data_.texelCount, glm::vec3(0.0f));
-  indirect_.assign(data_.texelCount, glm::vec3(0.0f));
   if (data_.lightmap.active()) {
     grid_.assign(data_.texelCount, glm::vec3(0.0f));
     lightmapDirect_.assign(data_.lightmap.texelCount, glm::vec3(0.0f));
@@ -310,8 +309,12 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
     if (dirty & kDirtySky) std::copy(sky_, sky_ + kShCount, data_.skySh);
     if (dirty & kDirtyIndirect) data_.indirectIntensity = indirectIntensity_;
   }
-  if (dirty & (kDirtyLights | kDirtyMaterials | kDirtySky)) solver_->prepare();
+  if (dirty & (kDirtyLights | kDirtyMaterials | kDirtySky))
+    solver_->prepare(((dirty & kDirtyLights) ? Solver::kSourcesChanged : 0u) |
+                     ((dirty & kDirtyMaterials) ? Solver::kMaterialsChanged : 0u) |
+                     ((dirty & kDirtySky) ? Solver::kSkyChanged : 0u));
   if (options.fromScratch) solver_->reset();
+  stats.prepareMilliseconds = millisecondsSince(start);
 
   // Passes: the same loop as Solver::solve() (so fromScratch matches a bake), plus the budget.
   const int limit = options.maxBounces > 0 ? options.maxBounces : options.maxBounces == 0 ? 1000 : 0;
@@ -327,6 +330,7 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
     stats.converged = stats.change < options.tolerance;
     if (options.maxBounces == 0 && stats.converged) break;
   }
+  stats.bounceMilliseconds = millisecondsSince(start) - stats.prepareMilliseconds;
 
   // Texel values as the bake computes them: direct (sky first, then sources) + indirect; with
   // two resolutions the grid's sum brought up to the lightmap's texels beside their direct light.
@@ -336,16 +340,16 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
   const unsigned gridDirect = data_.lightmap.active() ? kDirtySky : kDirtyDirect;
   if ((dirty & gridDirect) || firstUpdate_) solver_->directTexels(direct_.data());
   firstUpdate_ = false;
-  solver_->indirectTexels(indirect_.data());
-  // resolveAtlas assign()s the image; at its full size already, that never reallocates.
+  // The images were zero-filled at their full size at load: refreshAtlas writes only the
+  // pixels texels reach.
   const int back = 1 - front_;  // front_ is written only here, under updateLock
   std::vector<glm::vec3>& values = texels_[back];
   bool compose = true;
   if (data_.lightmap.active()) {
-    for (size_t t = 0; t < grid_.size(); ++t) grid_[t] = direct_[t] + indirect_[t];
+    solver_->addIndirectTexels(direct_.data(), grid_.data());
     const int gridBack = 1 - gridFront_;
     for (size_t a = 0; a < data_.atlases.size(); ++a)
-      resolveAtlas(data_.atlases[a], grid_, gridImages_[gridBack][a]);
+      refreshAtlas(data_.atlases[a], grid_, gridImages_[gridBack][a]);
     {
       std::lock_guard<std::mutex> lock(outputMutex_);
       gridFront_ = gridBack;
@@ -362,15 +366,15 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
       stats.composeMilliseconds = millisecondsSince(composeStart);
     }
   } else {
-    for (size_t t = 0; t < values.size(); ++t) values[t] = direct_[t] + indirect_[t];
+    solver_->addIndirectTexels(direct_.data(), values.data());
   }
   if (compose) {
     const std::vector<AtlasLayout>& atlases = data_.lightmapAtlases();
-    for (size_t a = 0; a < atlases.size(); ++a) resolveAtlas(atlases[a], values, images_[back][a]);
+    for (size_t a = 0; a < atlases.size(); ++a) refreshAtlas(atlases[a], values, images_[back][a]);
     std::lock_guard<std::mutex> lock(outputMutex_);
     front_ = back;
   }
-  lastOutputMs_ = millisecondsSince(outputStart);
+  lastOutputMs_ = stats.outputMilliseconds = millisecondsSince(outputStart);
   if (options.probes && !probeWork_.empty()) {
     const Clock::time_point probeStart = Clock::now();
     stats.probes = int(refreshProbes(0, probeWork_.size()));

@@ -40,10 +40,30 @@ glm::vec3 evalSky(const glm::vec3 sh[kShCount], const uint16_t* transfer) {
 }
 
 // Σ weight[k] · x[column[k]] over a row of a SparseMatrix of vec4 values.
-inline glm::vec4 mixRow(const SparseMatrix& m, size_t row, const glm::vec4* x) {
+inline glm::vec4 mixRow(const uint32_t* rowStart, const uint32_t* column, const float* weight,
+                        size_t row, const glm::vec4* x) {
+#ifdef AFTERGLOW_SSE2
+  // Four lanes at once, in the scalar loop's order (the same bits). Most rows hold one or two
+  // entries (a cluster's gather points, a texel's): the first one starts the sum instead of an
+  // add to zero, which measured 15% off a pass.
+  uint32_t k = rowStart[row];
+  const uint32_t end = rowStart[row + 1];
+  glm::vec4 out(0.0f);
+  if (k == end) return out;
+  __m128 sum = _mm_mul_ps(_mm_set1_ps(weight[k]), _mm_loadu_ps(&x[column[k]].x));
+  for (++k; k < end; ++k)
+    sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(weight[k]), _mm_loadu_ps(&x[column[k]].x)));
+  _mm_storeu_ps(&out.x, sum);
+  return out;
+#else
   glm::vec4 sum(0.0f);
-  for (uint32_t k = m.rowStart[row]; k < m.rowStart[row + 1]; ++k) sum += m.weight[k] * x[m.column[k]];
+  for (uint32_t k = rowStart[row]; k < rowStart[row + 1]; ++k) sum += weight[k] * x[column[k]];
   return sum;
+#endif
+}
+
+inline glm::vec4 mixRow(const SparseMatrix& m, size_t row, const glm::vec4* x) {
+  return mixRow(m.rowStart.data(), m.column.data(), m.weight.data(), row, x);
 }
 
 // The same over rows [first, last) into out, with the arrays' pointers held once (the per-pass
@@ -53,26 +73,7 @@ inline void mixRows(const SparseMatrix& m, size_t first, size_t last, const glm:
   const uint32_t* rowStart = m.rowStart.data();
   const uint32_t* column = m.column.data();
   const float* weight = m.weight.data();
-  for (size_t row = first; row < last; ++row) {
-#ifdef AFTERGLOW_SSE2
-    // Most rows hold one or two entries (a cluster's gather points): the first one starts the
-    // sum instead of an add to zero, which measured 15% off this pass.
-    uint32_t k = rowStart[row];
-    const uint32_t end = rowStart[row + 1];
-    if (k == end) {
-      _mm_storeu_ps(&out[row].x, _mm_setzero_ps());
-      continue;
-    }
-    __m128 sum = _mm_mul_ps(_mm_set1_ps(weight[k]), _mm_loadu_ps(&x[column[k]].x));
-    for (++k; k < end; ++k)
-      sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(weight[k]), _mm_loadu_ps(&x[column[k]].x)));
-    _mm_storeu_ps(&out[row].x, sum);
-#else
-    glm::vec4 sum(0.0f);
-    for (uint32_t k = rowStart[row]; k < rowStart[row + 1]; ++k) sum += weight[k] * x[column[k]];
-    out[row] = sum;
-#endif
-  }
+  for (size_t row = first; row < last; ++row) out[row] = mixRow(rowStart, column, weight, row, x);
 }
 
 }  // namespace
@@ -104,6 +105,7 @@ Solver::Solver(const TransportData& data) : data_(data) {
   const size_t clusters = data.clusterCount, rows = data.links.rows();
   albedo_.resize(clusters);
   clusterDirect_.resize(clusters);
+  clusterSky_.resize(clusters);
   reflected_.assign(clusters, glm::vec3(0.0f));
   reflected4_.assign(data.linkTargetCount(), glm::vec4(0.0f));
   gathered_.assign(rows, glm::vec4(0.0f));
@@ -137,18 +139,25 @@ Solver::Solver(const TransportData& data) : data_(data) {
   prepare();
 }
 
-void Solver::prepare() {
+void Solver::prepare(unsigned changed) {
   const uint32_t n = data_.clusterCount;
+  // Emissive sources' scales follow their materials: every source's is recomputed (a few).
   for (size_t i = 0; i < data_.sources.size(); ++i) {
     sourceScale_[i] = sourceScale(data_, data_.sources[i]);
     directScale_[i] = directScale(data_, data_.sources[i]);
   }
-  for (uint32_t c = 0; c < n; ++c) {
-    const MaterialParams& m = data_.materials[data_.clusterMaterial[c]];
-    albedo_[c] = boostAlbedo(m.albedo * data_.clusterAlbedoTexture[c], data_.albedoBoost);
-    clusterDirect_[c] =
-        data_.clusterSky.empty() ? glm::vec3(0.0f) : evalSky(data_.skySh, &data_.clusterSky[size_t(c) * kShCount]);
-  }
+  if (changed & kMaterialsChanged)
+    for (uint32_t c = 0; c < n; ++c) {
+      const MaterialParams& m = data_.materials[data_.clusterMaterial[c]];
+      albedo_[c] = boostAlbedo(m.albedo * data_.clusterAlbedoTexture[c], data_.albedoBoost);
+    }
+  if (changed & kSkyChanged)
+    for (uint32_t c = 0; c < n; ++c)
+      clusterSky_[c] = data_.clusterSky.empty()
+                           ? glm::vec3(0.0f)
+                           : evalSky(data_.skySh, &data_.clusterSky[size_t(c) * kShCount]);
+  // The sky first, then the sources in order: the same sum whatever changed.
+  std::copy(clusterSky_.begin(), clusterSky_.end(), clusterDirect_.begin());
   for (size_t i = 0; i < data_.sources.size(); ++i) {
     const Source& s = data_.sources[i];
     glm::vec3 scale = sourceScale_[i];
@@ -533,25 +542,41 @@ void Solver::directTexels(glm::vec3* direct, bool withSky) const {
   });
 }
 
-void Solver::indirectTexels(glm::vec3* indirect) const {
-  // Smoothing passes over the gather points, then each texel's mix of them.
+const glm::vec4* Solver::filteredPoints() const {
+  // Smoothing passes over the gather points (each texel's mix of them follows).
   const size_t points = data_.gatherPointCount;
-  const glm::vec4* source = gathered_.data();
-  if (data_.filterPasses > 0 && data_.pointFilter.rows() == points) {
-    std::copy(gathered_.begin(), gathered_.begin() + long(points), filtered_.begin());
-    for (int pass = 0; pass < data_.filterPasses; ++pass) {
-      forBlocks(points, [&](size_t first, size_t last) {
-        for (size_t p = first; p < last; ++p) scratch_[p] = mixRow(data_.pointFilter, p, filtered_.data());
-      });
-      filtered_.swap(scratch_);
-    }
-    source = filtered_.data();
+  if (data_.filterPasses <= 0 || data_.pointFilter.rows() != points) return gathered_.data();
+  const glm::vec4* in = gathered_.data();  // the gather points' rows come first
+  for (int pass = 0; pass < data_.filterPasses; ++pass) {
+    forBlocks(points, [&](size_t first, size_t last) {
+      mixRows(data_.pointFilter, first, last, in, scratch_.data());
+    });
+    filtered_.swap(scratch_);
+    in = filtered_.data();
   }
+  return in;
+}
+
+template <class Store>
+void Solver::mixTexels(const Store& store) const {
+  const glm::vec4* source = filteredPoints();
   const float scale = data_.indirectIntensity;
+  const SparseMatrix& gather = data_.texelGather;
   forBlocks(data_.texelCount, [&](size_t first, size_t last) {
+    const uint32_t* rowStart = gather.rowStart.data();
+    const uint32_t* column = gather.column.data();
+    const float* weight = gather.weight.data();
     for (size_t t = first; t < last; ++t)
-      indirect[t] = scale * glm::vec3(mixRow(data_.texelGather, t, source));
+      store(t, scale * glm::vec3(mixRow(rowStart, column, weight, t, source)));
   });
+}
+
+void Solver::indirectTexels(glm::vec3* indirect) const {
+  mixTexels([indirect](size_t t, glm::vec3 v) { indirect[t] = v; });
+}
+
+void Solver::addIndirectTexels(const glm::vec3* direct, glm::vec3* sum) const {
+  mixTexels([direct, sum](size_t t, glm::vec3 v) { sum[t] = direct[t] + v; });
 }
 
 void Solver::lightmapDirect(glm::vec3* direct) const {

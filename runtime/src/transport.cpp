@@ -11,21 +11,33 @@ namespace afterglow::runtime {
 
 void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texelValues,
                   std::vector<glm::vec3>& image) {
-  const size_t pixels = size_t(layout.width) * size_t(layout.height);
-  image.assign(pixels, glm::vec3(0.0f));
+  image.assign(size_t(layout.width) * size_t(layout.height), glm::vec3(0.0f));
+  refreshAtlas(layout, texelValues, image);
+}
+
+void refreshAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texelValues,
+                  std::vector<glm::vec3>& image) {
+  const size_t pixels = std::min(size_t(layout.width) * size_t(layout.height), image.size());
   const size_t mapped = std::min(pixels, layout.texelOfPixel.size());
-  for (size_t p = 0; p < mapped; ++p) {
-    const uint32_t t = layout.texelOfPixel[p];
-    if (t < texelValues.size()) image[p] = texelValues[t];
-  }
-  for (size_t i = 0; i + 1 < layout.mixStart.size() && i < layout.mixPixel.size(); ++i) {
+  // The arrays' pointers and sizes held once: a runtime refreshes every pixel every frame.
+  const glm::vec3* values = texelValues.data();
+  const size_t count = texelValues.size();
+  const uint32_t* texelOf = layout.texelOfPixel.data();
+  glm::vec3* out = image.data();
+  for (size_t p = 0; p < mapped; ++p)
+    if (texelOf[p] < count) out[p] = values[texelOf[p]];
+  const uint32_t* mixStart = layout.mixStart.data();
+  const uint32_t* mixTexel = layout.mixTexel.data();
+  const float* mixWeight = layout.mixWeight.data();
+  const size_t mixes =
+      layout.mixStart.empty() ? 0 : std::min(layout.mixStart.size() - 1, layout.mixPixel.size());
+  for (size_t i = 0; i < mixes; ++i) {
     const uint32_t p = layout.mixPixel[i];
     if (p >= pixels) continue;
     glm::vec3 sum(0.0f);
-    for (uint32_t k = layout.mixStart[i]; k < layout.mixStart[i + 1]; ++k)
-      if (layout.mixTexel[k] < texelValues.size())
-        sum += layout.mixWeight[k] * texelValues[layout.mixTexel[k]];
-    image[p] = sum;
+    for (uint32_t k = mixStart[i]; k < mixStart[i + 1]; ++k)
+      if (mixTexel[k] < count) sum += mixWeight[k] * values[mixTexel[k]];
+    out[p] = sum;
   }
 }
 

@@ -31,5 +31,10 @@ struct AtlasLayout {
 // texel or a mix are black.
 void resolveAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texelValues,
                   std::vector<glm::vec3>& image);
+// The same into an image of width*height pixels that holds black wherever the layout puts
+// neither a texel nor a mix (as resolveAtlas leaves it, or zero-filled): writes only the pixels
+// the texels reach, so a runtime refreshing its atlases every frame skips clearing them.
+void refreshAtlas(const AtlasLayout& layout, const std::vector<glm::vec3>& texelValues,
+                  std::vector<glm::vec3>& image);
 
 }  // namespace afterglow::runtime

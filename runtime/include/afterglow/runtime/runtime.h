@@ -100,6 +100,9 @@ struct UpdateStats {
   bool converged = false;   // the last pass changed the solution by less than the tolerance
   float change = 0.0f;      // the last pass's largest relative change (0 when no pass ran)
   double milliseconds = 0;  // wall time of the whole call
+  double prepareMilliseconds = 0;  // of which taking changed lights, materials or sky took
+  double bounceMilliseconds = 0;   // of which the bounces took
+  double outputMilliseconds = 0;   // of which the lightmap's (or grid's) atlases took
   int probes = 0;                // light probes refreshed
   double probeMilliseconds = 0;  // of which the probes took (their share of the call)
   int reflectionPasses = 0;           // reflection probe capture passes run (units, above)
@@ -310,8 +313,7 @@ class Runtime {
   // Serialises update() and setParallelFor(); guards everything below but the outputs.
   std::mutex updateMutex_;
   std::vector<glm::vec3> direct_;    // kept until a light, emission or the sky changes
-  std::vector<glm::vec3> indirect_;
-  // Two resolutions: the grid's values (direct_ + indirect_, sky and bounces) and the sources'
+  // Two resolutions: the grid's values (direct_ + bounced light: sky and bounces) and the sources'
   // direct light per lightmap texel (kept like direct_).
   std::vector<glm::vec3> grid_;
   std::vector<glm::vec3> lightmapDirect_;

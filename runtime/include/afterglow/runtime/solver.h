@@ -51,8 +51,12 @@ class Solver {
 
   // Recomputes the per-cluster direct and sky terms and the albedos from the data's current
   // source, material and sky settings. The bounced light so far stays (a relit scene converges
-  // from the old solution in a few passes).
-  void prepare();
+  // from the old solution in a few passes). `changed` names what changed since the last
+  // prepare (PrepareParts): the clusters' albedos are kept unless materials changed, their sky
+  // unless the sky did; the result is the same bits as a full prepare.
+  enum PrepareParts : unsigned { kSourcesChanged = 1, kMaterialsChanged = 2, kSkyChanged = 4,
+                                 kAllChanged = 7 };
+  void prepare(unsigned changed = kAllChanged);
   // Runs one bounce; returns the largest relative change of any cluster's reflected light.
   float iterate();
   // Iterates to convergence or options.maxBounces passes; returns the passes run.
@@ -71,6 +75,9 @@ class Solver {
   void directTexels(glm::vec3* direct, bool withSky = true) const;
   void skyTexels(glm::vec3* sky) const;  // S_t alone
   void indirectTexels(glm::vec3* indirect) const;
+  // direct[t] + indirectTexels' value into sum[t]: the same bits as the two added afterwards,
+  // without a pass over the texels of its own.
+  void addIndirectTexels(const glm::vec3* direct, glm::vec3* sum) const;
 
   // Two resolutions (TransportData::lightmap, lightmap_layers.h), per lightmap texel: the
   // sources' direct light as set now, and the indirect texels' values (grid[t] for indirect
@@ -113,12 +120,19 @@ class Solver {
   static constexpr size_t kBlock = 2048;  // clusters, rows or texels per block of work
   // out[row] = Σ link weight × R[target] over every row of m (the hot loop of a bounce).
   void gatherRows(const SparseLinks& m, glm::vec4* out);
+  // The gathered values after the smoothing passes over the gather points (filtered_, or
+  // gathered_ itself without passes).
+  const glm::vec4* filteredPoints() const;
+  // store(t, indirect light of texel t) for every texel.
+  template <class Store>
+  void mixTexels(const Store& store) const;
 
   const TransportData& data_;
   ParallelFor parallelFor_;
   std::vector<float> blockChange_;          // iterate(): largest change per block
   std::vector<glm::vec3> albedo_;           // boosted diffuse albedo per cluster
   std::vector<glm::vec3> clusterDirect_;    // D_c (with bounceIntensity) + S_c
+  std::vector<glm::vec3> clusterSky_;       // S_c alone (kept while the sky does not change)
   std::vector<glm::vec3> reflected_;        // R_c
   std::vector<glm::vec4> reflected4_;       // R_c padded to 16 bytes for the links' inner
                                             //   loop, then the far clusters' R_f and
