@@ -1,7 +1,8 @@
 // afterglow_bench accuracy: one bake against the reference path tracer, direct and indirect
 // light apart, with any bake setting changed from the command line; a tool for tuning the
 // precompute (afterglow_bench bake prints the figures with the default settings).
-//   afterglow_bench accuracy [SCENE] [--texels-per-unit N | --atlas-size N] [--spp N]
+//   afterglow_bench accuracy [SCENE] [--texels-per-unit N | --atlas-size N]
+//       [--indirect-texels-per-unit N] [--spp N]
 //       [--stride N] [--threads N] [--quality draft|default|high] [--texel-rays N]
 //       [--near-rays N] [--near-distance X] [--near-field X] [--block-distance X]
 //       [--cluster-size M] [--cluster-texels N] [--adaptive-scale X] [--distance-ratio X] [--min-texels N]
@@ -60,7 +61,12 @@ void printWorst(const baker::BakeResult& b, const baker::ReferenceTexels& ref, s
     const glm::vec3 p = b.texels.position[t], n = b.texels.normal[t];
     std::printf("  texel %6u at (%.3f %.3f %.3f) n (%.2f %.2f %.2f) cluster %u: %.3f, %.5f vs "
                 "%.5f ± %.5f\n",
-                t, p.x, p.y, p.z, n.x, n.y, n.z, b.clusters.texelCluster[t], error(i),
+                t, p.x, p.y, p.z, n.x, n.y, n.z,
+                // With an indirect grid the clusters are the grid's texels'.
+                t < b.clusters.texelCluster.size() && !b.transport.lightmap.active()
+                    ? b.clusters.texelCluster[t]
+                    : runtime::kNoTexel,
+                error(i),
                 glm::length(baked[t]), glm::length(want[i]), std::sqrt(variance[i].x));
   }
 }
@@ -70,7 +76,7 @@ void printWorst(const baker::BakeResult& b, const baker::ReferenceTexels& ref, s
 int benchAccuracy(int argc, char** argv) {
   std::string scenePath =
       std::string(AFTERGLOW_SHARED_DIR) + "/scenes/cornell_box_mcguire/CornellBox-Original.gltf";
-  float texelsPerUnit = 0.0f;
+  float texelsPerUnit = 0.0f, indirectTexelsPerUnit = 0.0f;
   int atlasSize = 256, threads = 2, spp = 16384, stride = 32, worst = 0, repeat = 1;
   int breakdownRays = 0;
   bool worstDirect = false, singleSidedEmission = false;
@@ -81,6 +87,7 @@ int benchAccuracy(int argc, char** argv) {
     auto next = [&]() { return i + 1 < argc ? std::atof(argv[++i]) : 0.0; };
     if (arg == "--texels-per-unit") texelsPerUnit = float(next()), atlasSize = 0;
     else if (arg == "--atlas-size") atlasSize = int(next());
+    else if (arg == "--indirect-texels-per-unit") indirectTexelsPerUnit = float(next());
     else if (arg == "--threads") threads = int(next());
     else if (arg == "--spp") spp = int(next());
     else if (arg == "--stride") stride = int(next());
@@ -132,7 +139,7 @@ int benchAccuracy(int argc, char** argv) {
   if (singleSidedEmission)
     for (scenes::Material& m : scene.materials) m.singleSidedEmission = true;
   Result<float> density =
-      unwrapForBench(scene, texelsPerUnit > 0.0f ? texelsPerUnit : 16.0f, atlasSize);
+      unwrapForBench(scene, texelsPerUnit > 0.0f ? texelsPerUnit : 16.0f, atlasSize, indirectTexelsPerUnit);
   if (!density) return fail(density.message());
 
   auto t0 = Clock::now();

@@ -22,11 +22,13 @@ void printErrors(const baker::ReferenceComparison& c) {
   line("total", c.total);
 }
 
-Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atlasSize) {
+Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atlasSize,
+                             float indirectTexelsPerUnit) {
   bakefiles::BakeJob job;
   job.input = scene.sourcePath;
   job.texelsPerUnit = texelsPerUnit;
   job.atlasSize = atlasSize;
+  job.indirectTexelsPerUnit = indirectTexelsPerUnit;
   Result<bakefiles::UnwrapStep> step = bakefiles::unwrapForBake(scene, job);
   if (!step) return step.status();
   return step->texelsPerUnit;

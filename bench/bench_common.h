@@ -29,7 +29,8 @@ inline Result<scenes::Scene> loadBenchScene(const std::string& path, bool textur
 // Lightmap UVs as `afterglow bake` makes them (bakefiles::unwrapForBake): at texelsPerUnit, or
 // (atlasSize > 0) at the most texels per metre that fit one atlas of that size. Returns the
 // texels per metre used.
-Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atlasSize = 0);
+Result<float> unwrapForBench(scenes::Scene& scene, float texelsPerUnit, int atlasSize = 0,
+                             float indirectTexelsPerUnit = 0.0f);
 
 const char* mark(bool ok);
 

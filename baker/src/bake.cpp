@@ -247,9 +247,12 @@ Status dilate(Bake& b) {
       runtime::resolveAtlas(layout, values, r.lightmaps.back());
     }
     if (b.twoResolutions) {
-      // The grid's atlases for engines, filled and dilated like the lightmap's (no seams
-      // stitched: the grid is read bilinearly, bounced light is smooth across them anyway).
+      // The grid's atlases for engines, filled like the lightmap's, dilated by the one pixel a
+      // bilinear read at TEXCOORD_2 reaches beyond a chart (every pixel more is work for the
+      // runtime each frame: half the grid atlas's pixels are padding), no seams stitched
+      // (bounced light is smooth across them anyway).
       PostOptions gridPost = post;
+      gridPost.dilation = std::min(post.dilation, 1);
       gridPost.stitchSeams = false;
       computeAtlasMixes(r.indirectTexels, b.scene, gridPost);
       for (const runtime::AtlasLayout& layout : r.indirectTexels.atlases) {

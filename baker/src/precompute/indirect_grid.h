@@ -16,9 +16,13 @@ namespace afterglow::baker {
 bool indirectPoint(const scenes::Scene& scene, const TexelSet& lightmap, uint32_t t,
                    glm::dvec2& out);
 
+// How far (indirect pixels) t's point may map through another triangle of its chart: the
+// similarity maps of one chart agree up to rounding.
+constexpr double kSameChart = 0.25;
+
 // The indirect texel at pixel (x, y) of lightmap texel t's indirect atlas when it is a valid
-// texel of t's instance, else kNoTexel.
+// texel of t's chart (`point`: t's indirectPoint), else kNoTexel.
 uint32_t gridTexel(const scenes::Scene& scene, const TexelSet& lightmap, uint32_t t,
-                   const TexelSet& indirect, int x, int y);
+                   glm::dvec2 point, const TexelSet& indirect, int x, int y);
 
 }  // namespace afterglow::baker
