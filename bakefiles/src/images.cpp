@@ -72,6 +72,17 @@ Status writeExr(const std::string& path, int width, int height,
   return writeImage(path, "exr", spec, OIIO::TypeDesc::FLOAT, pixels.data(), out);
 }
 
+Status writeLinearRgbaPng(const std::string& path, int width, int height,
+                          const std::vector<glm::vec4>& pixels, AtomicOutput& out) {
+  std::vector<uint8_t> bytes(pixels.size() * 4);
+  for (size_t i = 0; i < pixels.size(); ++i)
+    for (int k = 0; k < 4; ++k)
+      bytes[4 * i + size_t(k)] = uint8_t(std::lround(255.0f * std::clamp(pixels[i][k], 0.0f, 1.0f)));
+  OIIO::ImageSpec spec(width, height, 4, OIIO::TypeDesc::UINT8);
+  spec.attribute("oiio:ColorSpace", "Linear");
+  return writeImage(path, "png", spec, OIIO::TypeDesc::UINT8, bytes.data(), out);
+}
+
 Status writeTonemappedPng(const std::string& path, int width, int height,
                           const std::vector<glm::vec3>& pixels, float exposure,
                           AtomicOutput& out) {

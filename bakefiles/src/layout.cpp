@@ -22,6 +22,10 @@ std::string indirectPng(size_t atlas) {
   return std::string(kLightmapsDir) + "/indirect" + std::to_string(atlas) + ".png";
 }
 
+std::string shadowmaskPng(size_t atlas) {
+  return std::string(kLightmapsDir) + "/shadowmask" + std::to_string(atlas) + ".png";
+}
+
 std::string reflectionExr(size_t chain) {
   return chain == 0 ? "reflection_sky.exr" : "reflection_" + std::to_string(chain) + ".exr";
 }

@@ -230,6 +230,28 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
     indirectAtlases = grid.value();
   }
 
+  // Mixed lights' shadowmask: the images, and per light its channel.
+  json shadowmask = nullptr;
+  if (!result.shadowmasks.empty()) {
+    json images = json::array(), channels = json::object();
+    for (size_t a = 0; a < result.shadowmasks.size() && a < texels.atlases.size(); ++a) {
+      const std::string path = inFolder(outDir, shadowmaskPng(a));
+      if (Status s = writeLinearRgbaPng(path, texels.atlases[a].width, texels.atlases[a].height,
+                                        result.shadowmasks[a], out);
+          !s)
+        return s;
+      written.push_back(path);
+      images.push_back(shadowmaskPng(a));
+    }
+    for (size_t i = 0; i < result.shadowmaskChannel.size() && i < scene.lights.size(); ++i)
+      if (result.shadowmaskChannel[i] >= 0) channels[scene.lights[i].name] = result.shadowmaskChannel[i];
+    shadowmask = {{"images", images},
+                  {"texCoord", 1},
+                  {"encoding", "linear 8-bit: the visible fraction of the light given the "
+                               "channel (0 shadowed, 1 lit); 1 where no light has it"},
+                  {"channels", channels}};
+  }
+
   Result<SavedGltf> saved = saveAndReadGltf(scene, outDir);
   if (!saved) return saved.status();
   json& doc = saved->doc;
@@ -237,6 +259,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   // An engine composing the lightmap itself: the grid's atlases, read at TEXCOORD_2 (the
   // direct light's layers are in the transport).
   if (!indirectAtlases.empty()) doc["extras"]["afterglow"]["indirectLightmaps"] = indirectAtlases;
+  if (!shadowmask.is_null()) doc["extras"]["afterglow"]["shadowmask"] = shadowmask;
   if (Status s = writeReflectionOutputs(result.transport, result.reflectionChains, result.dfg,
                                         outDir, doc, out, written);
       !s)
@@ -325,6 +348,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   report["raysTraced"] = result.raysTraced;
   report["stageRays"] = stageRays;
   report["transport"] = transportInfo;
+  if (!shadowmask.is_null()) report["shadowmask"] = shadowmask;
   report["probes"] = {{"count", result.transport.probes.count()},
                       {"tetrahedra", result.transport.probes.mesh.tetrahedra.size()},
                       {"links", result.transport.probes.links.linkCount()},

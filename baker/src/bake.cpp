@@ -11,6 +11,7 @@
 #include "afterglow/baker/probe_transfer.h"
 #include "afterglow/baker/reference.h"
 #include "afterglow/baker/reflection_capture.h"
+#include "afterglow/baker/shadowmask.h"
 #include "afterglow/baker/sky.h"
 #include "afterglow/core/parallel.h"
 #include "afterglow/core/timer.h"
@@ -263,6 +264,31 @@ Status dilate(Bake& b) {
       r.transport.lightmap.atlases = r.texels.atlases;
     } else if (!b.options.reference) {
       r.transport.atlases = r.texels.atlases;
+    }
+  }
+  if (!b.options.reference) {
+    std::vector<std::string> overflow;
+    r.shadowmaskChannel = shadowmaskChannels(b.scene.lights, &overflow);
+    for (const std::string& name : overflow)
+      r.warnings.push_back(format("mixed light '%s' overlaps %d other mixed lights: no shadowmask "
+                                  "channel is left for it, its static shadow is not baked",
+                                  name.c_str(), kShadowmaskChannels));
+    if (std::any_of(r.shadowmaskChannel.begin(), r.shadowmaskChannel.end(),
+                    [](int c) { return c >= 0; })) {
+      // Through the lightmaps' own layouts (fill and dilation), as three channels and one:
+      // resolveAtlas mixes vec3 values.
+      const std::vector<glm::vec4> mask =
+          shadowmaskTexels(b.scene, r.texels, r.transport, r.shadowmaskChannel);
+      std::vector<glm::vec3> rgb(mask.size()), a(mask.size());
+      for (size_t t = 0; t < mask.size(); ++t)
+        rgb[t] = glm::vec3(mask[t]), a[t] = glm::vec3(mask[t].w);
+      for (const runtime::AtlasLayout& layout : r.texels.atlases) {
+        std::vector<glm::vec3> first, second;
+        runtime::resolveAtlas(layout, rgb, first);
+        runtime::resolveAtlas(layout, a, second);
+        std::vector<glm::vec4>& image = r.shadowmasks.emplace_back(first.size());
+        for (size_t p = 0; p < first.size(); ++p) image[p] = glm::vec4(first[p], second[p].x);
+      }
     }
   }
   b.progress.advance();

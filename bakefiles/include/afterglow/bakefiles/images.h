@@ -37,6 +37,10 @@ Status writeExr(const std::string& path, int width, int height,
 Status writeTonemappedPng(const std::string& path, int width, int height,
                           const std::vector<glm::vec3>& pixels, float exposure,
                           AtomicOutput& out);
+// 8-bit RGBA PNG of values in [0, 1] stored linearly (v × 255, rounded): data, not a picture
+// (a shadowmask).
+Status writeLinearRgbaPng(const std::string& path, int width, int height,
+                          const std::vector<glm::vec4>& pixels, AtomicOutput& out);
 // The exposure that maps the 99th percentile luminance of the given pixels (those with a
 // non-zero mask entry, or all when the mask is empty) to 0.8 after the Reinhard curve.
 float autoExposure(const std::vector<glm::vec3>& pixels, const std::vector<uint8_t>& mask = {});

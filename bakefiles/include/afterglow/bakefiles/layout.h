@@ -37,6 +37,8 @@ std::string lightmapPng(size_t atlas);
 // reads at TEXCOORD_2 and composes with the direct light.
 std::string indirectExr(size_t atlas);
 std::string indirectPng(size_t atlas);
+// Mixed lights' shadowmask for lightmap atlas `atlas`: RGBA, linear 8-bit visible fractions.
+std::string shadowmaskPng(size_t atlas);
 // A reflection chain's cube map within kProbesDir: "reflection_sky.exr" for chain 0 (the sky),
 // "reflection_<i>.exr" for probe i's.
 std::string reflectionExr(size_t chain);

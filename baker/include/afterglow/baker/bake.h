@@ -46,6 +46,11 @@ struct BakeResult {
   // Two resolutions: per indirect atlas, the grid's sky and bounced light (E/π, dilated), what
   // an engine composing the lightmap itself reads at the indirect UVs; else empty.
   std::vector<std::vector<glm::vec3>> indirectLightmaps;
+  // Mixed lights' shadowmask (shadowmask.h): per lightmap atlas, width*height RGBA visible
+  // fractions, filled and dilated like the lightmaps; empty when no light is mixed. Per scene
+  // light, its channel (-1: none).
+  std::vector<std::vector<glm::vec4>> shadowmasks;
+  std::vector<int> shadowmaskChannel;
   // Per light probe (BakeOptions::probes), its radiance SH from the same solve.
   std::vector<runtime::ShL2> probeSh;
   // Per reflection probe, its prefiltered radiance (mips 0..6): [0] the sky, [i + 1]
