@@ -135,5 +135,37 @@ TEST(Shadowmask, AMixedLightsChannelIsItsVisibility) {
   expectVisibility(true, "indirect grid");
 }
 
+// Light probes carry the mixed light's occlusion (Unity's probe occlusion) as a probe sees it,
+// channel by channel: points all through the box, some in the blocks' shadows.
+TEST(Shadowmask, ProbeOcclusionIsTheLightsVisibility) {
+  const scenes::Scene scene = mixedLampBox(false);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
+  ASSERT_TRUE(tracer) << tracer.message();
+  const scenes::Bounds box = scene.bounds();
+  std::vector<glm::vec3> points;
+  for (int z = 0; z < 8; ++z)
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x)
+        points.push_back(box.min + (box.max - box.min) * (glm::vec3(x, y, z) + 0.5f) / 8.0f);
+  const std::vector<int> channels = shadowmaskChannels(scene.lights);
+  const std::vector<glm::vec4> occlusion = probeOcclusion(scene, *tracer.value(), points, channels, 256);
+  ASSERT_EQ(occlusion.size(), points.size());
+  double sum = 0.0;
+  size_t shadowed = 0, lit = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const float want = visibility(*tracer.value(), scene.lights[0], points[i]);
+    sum += std::abs(double(occlusion[i].x) - double(want));
+    shadowed += want < 0.5f;
+    lit += want > 0.5f;
+    EXPECT_EQ(occlusion[i].y, 1.0f);
+  }
+  std::printf("%zu probe positions (%zu shadowed, %zu lit): occlusion vs visibility, mean "
+              "difference %.4f\n",
+              points.size(), shadowed, lit, sum / double(points.size()));
+  EXPECT_GT(shadowed, 10u);
+  EXPECT_GT(lit, 10u);
+  EXPECT_LE(sum / double(points.size()), 0.02);
+}
+
 }  // namespace
 }  // namespace afterglow::baker

@@ -323,6 +323,16 @@ Result<std::vector<std::string>> writeBakeFolder(const scenes::Scene& scene,
                                      written.value());
         !st)
       return st;
+  if (!level.result.probeOcclusion.empty()) {
+    nlohmann::json channels = nlohmann::json::object();
+    for (size_t i = 0; i < level.result.shadowmaskChannel.size() && i < scene.lights.size(); ++i)
+      if (level.result.shadowmaskChannel[i] >= 0)
+        channels[scene.lights[i].name] = level.result.shadowmaskChannel[i];
+    if (Status st = writeProbeOcclusion(outDir, level.result.probeOcclusion, channels, out,
+                                        written.value());
+        !st)
+      return st;
+  }
   return written;
 }
 

@@ -212,6 +212,24 @@ Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
   return Status::ok();
 }
 
+Status writeProbeOcclusion(const std::string& outDir, const std::vector<glm::vec4>& occlusion,
+                           const json& channels, AtomicOutput& out,
+                           std::vector<std::string>& written) {
+  json values = json::array();
+  for (const glm::vec4& o : occlusion) values.push_back({o.x, o.y, o.z, o.w});
+  const json doc = {{"format", "afterglow-light-probe-occlusion"},
+                    {"version", 1},
+                    {"stores", "per light probe, in light_probes.json's order, the visible "
+                               "fraction of the mixed light given each shadowmask channel (1 "
+                               "where no light has it)"},
+                    {"channels", channels},
+                    {"occlusion", values}};
+  const std::string path = inProbes(outDir, kLightProbeOcclusion);
+  if (Status st = out.write(path, doc.dump() + "\n"); !st) return st;
+  written.push_back(path);
+  return Status::ok();
+}
+
 Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
                                                   const baker::BakeResult& result,
                                                   const std::string& outDir,

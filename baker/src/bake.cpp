@@ -289,6 +289,9 @@ Status dilate(Bake& b) {
         std::vector<glm::vec4>& image = r.shadowmasks.emplace_back(first.size());
         for (size_t p = 0; p < first.size(); ++p) image[p] = glm::vec4(first[p], second[p].x);
       }
+      if (r.transport.probes.count() > 0)
+        r.probeOcclusion = probeOcclusion(b.scene, *b.tracer, r.transport.probes.mesh.positions,
+                                          r.shadowmaskChannel);
     }
   }
   b.progress.advance();

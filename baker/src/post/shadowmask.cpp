@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <limits>
 
+#include "afterglow/core/parallel.h"
 #include "afterglow/runtime/lightmap_layers.h"
+#include "afterglow/trace/raytracer.h"
 #include "shading/light_model.h"
+#include "shading/sampling.h"
 
 namespace afterglow::baker {
 namespace {
@@ -61,6 +64,40 @@ std::vector<glm::vec4> shadowmaskTexels(const scenes::Scene& scene, const TexelS
     }
   }
   return mask;
+}
+
+std::vector<glm::vec4> probeOcclusion(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                                      const std::vector<glm::vec3>& positions,
+                                      const std::vector<int>& channels, int rays) {
+  std::vector<glm::vec4> occlusion(positions.size(), glm::vec4(1.0f));
+  const sampling::Stratified strata{uint32_t(std::max(1, rays))};
+  parallelForBlocks(positions.size(), [&](size_t begin, size_t end, int) {
+    for (size_t p = begin; p < end; ++p)
+      for (size_t k = 0; k < channels.size() && k < scene.lights.size(); ++k) {
+        if (channels[k] < 0) continue;
+        const scenes::Light& light = scene.lights[k];
+        // The light as seen facing it (a probe has no surface): its centre, distance, extent.
+        const glm::vec3 toLight = light.type == scenes::LightType::Directional
+                                      ? -glm::normalize(light.direction)
+                                      : glm::normalize(light.position - positions[p]);
+        const LightView view = viewLight(light, positions[p], toLight);
+        const int count = view.hasExtent ? std::max(1, rays) : 1;
+        const sampling::Rng::ItemSeed seed{
+            sampling::Rng::itemSeed(sampling::Stream::ProbeOcclusion, p)};
+        int through = 0;
+        for (int s = 0; s < count; ++s) {
+          sampling::Rng rng(seed, (uint64_t(k) << 32) | uint64_t(s));
+          trace::Ray ray;
+          ray.origin = positions[p];
+          lightShadowRay(light, view, positions[p], strata.point(rng, uint32_t(s)), &ray.direction,
+                         &ray.tfar);
+          ray.mask = trace::kMaskShadowCasters;
+          through += tracer.occluded(ray) ? 0 : 1;
+        }
+        occlusion[p][channels[k]] = float(through) / float(count);
+      }
+  }, 256);
+  return occlusion;
 }
 
 }  // namespace afterglow::baker

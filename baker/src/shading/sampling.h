@@ -29,6 +29,7 @@ enum class Stream : uint64_t {
   Probes = 8,
   GlassSky = 9,
   Burial = 10,
+  ProbeOcclusion = 11,
 };
 
 using afterglow::mix64;  // core/math.h

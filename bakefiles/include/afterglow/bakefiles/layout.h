@@ -27,6 +27,8 @@ constexpr const char kProbesDir[] = "probes";
 // Within kProbesDir (light_probes.json names its SH file relative to itself).
 constexpr const char kLightProbesJson[] = "light_probes.json";
 constexpr const char kLightProbesSh[] = "light_probes_sh.bin";
+// Mixed lights' probe occlusion (Unity's), when a light is mixed.
+constexpr const char kLightProbeOcclusion[] = "light_probe_occlusion.json";
 constexpr const char kReflectionProbesJson[] = "reflection_probes.json";
 constexpr const char kDfgExr[] = "dfg.exr";
 

@@ -67,6 +67,11 @@ Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
                         const std::vector<uint16_t>& depth, float dering,
                         const nlohmann::json& settings, AtomicOutput& out,
                         std::vector<std::string>& written);
+// OUT/probes/light_probe_occlusion.json: per probe (in light_probes.json's order) its
+// occlusion of the mixed lights by shadowmask channel, and each mixed light's channel.
+Status writeProbeOcclusion(const std::string& outDir, const std::vector<glm::vec4>& occlusion,
+                           const nlohmann::json& channels, AtomicOutput& out,
+                           std::vector<std::string>& written);
 
 // The reflection probes' files (when the bake has any): OUT/probes/reflection_sky.exr and
 // reflection_<i>.exr (OpenEXR cube environment maps, the prefiltered mips as mip levels),

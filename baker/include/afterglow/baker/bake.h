@@ -51,6 +51,9 @@ struct BakeResult {
   // light, its channel (-1: none).
   std::vector<std::vector<glm::vec4>> shadowmasks;
   std::vector<int> shadowmaskChannel;
+  // Per light probe, its occlusion of the mixed lights by shadowmask channel (probeOcclusion);
+  // empty without probes or mixed lights.
+  std::vector<glm::vec4> probeOcclusion;
   // Per light probe (BakeOptions::probes), its radiance SH from the same solve.
   std::vector<runtime::ShL2> probeSh;
   // Per reflection probe, its prefiltered radiance (mips 0..6): [0] the sky, [i + 1]

@@ -33,4 +33,12 @@ std::vector<glm::vec4> shadowmaskTexels(const scenes::Scene& scene, const TexelS
                                         const runtime::TransportData& transport,
                                         const std::vector<int>& channels);
 
+// Light probes' occlusion for mixed lights (Unity's probe occlusion): per probe position,
+// channel c = the visible fraction of the light given channel c, from `rays` stratified shadow
+// rays over its extent (one without an extent), 1 where no light has the channel. An engine
+// multiplies a mixed light's direct light on a dynamic object by it, mixed like the probes' SH.
+std::vector<glm::vec4> probeOcclusion(const scenes::Scene& scene, const trace::RayTracer& tracer,
+                                      const std::vector<glm::vec3>& positions,
+                                      const std::vector<int>& channels, int rays = 64);
+
 }  // namespace afterglow::baker
