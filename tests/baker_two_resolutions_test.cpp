@@ -22,7 +22,9 @@
 #include "afterglow/uv/indirect.h"
 #include "afterglow/uv/metrics.h"
 #include "bake_fixtures.h"
+#include "precompute/burial.h"
 #include "precompute/indirect_grid.h"
+#include "afterglow/trace/raytracer.h"
 
 namespace afterglow::baker {
 namespace {
@@ -240,6 +242,47 @@ TEST(TwoResolutions, LightmapTexelsReadGridTexelsOfTheirOwnChart) {
   // offset from the other in both atlases) have the same map, and only those pass: 21 of the
   // 11,323 pixels here (all of them passed before).
   EXPECT_LE(foreign, otherCharts / 200);
+}
+
+// Lightmap texels behind a single-sided wall standing on their floor see its back over half
+// their hemisphere: buried by the gather's rule (more than a tenth of their rays on back faces),
+// whichever side of the texels' frame the wall stands on. Two walls, facing -z and +z, with a
+// row of floor texels 2 cm behind each (a floor texel's frame splits its azimuth along z).
+TEST(TwoResolutions, TexelsHalfBehindAWallAreBuried) {
+  scenes::Scene scene = groundQuad("floor", 3.0f, 0.8f);
+  scenes::Mesh walls;
+  walls.name = "walls";
+  scenes::Primitive p;
+  p.material = 0;
+  addQuad(p, {-2, 0, 0}, {-2, 2, 0}, {2, 2, 0}, {2, 0, 0}, {0, 0, -1});              // faces -z
+  addQuad(p, {2, 0, 1.5f}, {2, 2, 1.5f}, {-2, 2, 1.5f}, {-2, 0, 1.5f}, {0, 0, 1});  // faces +z
+  walls.primitives.push_back(p);
+  scene.meshes.push_back(walls);
+  scenes::Instance inst;
+  inst.name = "walls";
+  inst.mesh = int(scene.meshes.size()) - 1;
+  scene.instances.push_back(inst);
+  Result<std::unique_ptr<trace::RayTracer>> tracer = trace::RayTracer::build(scene);
+  ASSERT_TRUE(tracer) << tracer.message();
+  TexelSet texels;
+  for (float z : {0.02f, 1.48f})
+    for (int i = 0; i < 32; ++i) {
+      texels.position.push_back({-1.5f + 3.0f * (float(i) + 0.5f) / 32.0f, 0.001f, z});
+      texels.normal.push_back({0, 1, 0});
+      texels.geometricNormal.push_back({0, 1, 0});
+      texels.edge.push_back(0.0625f);
+      texels.valid.push_back(1);
+      texels.nearGeometry.push_back(0);
+    }
+  const size_t buried = buryLightmapTexels(*tracer.value(), texels, LinkOptions());
+  size_t behindMinus = 0, behindPlus = 0;
+  for (uint32_t t = 0; t < texels.size(); ++t)
+    (t < 32 ? behindMinus : behindPlus) += texels.valid[t] ? 0 : 1;
+  std::printf("buried: %zu of 32 behind the wall facing -z, %zu of 32 behind the one facing +z\n",
+              behindMinus, behindPlus);
+  EXPECT_EQ(buried, 64u);
+  EXPECT_EQ(behindMinus, 32u);
+  EXPECT_EQ(behindPlus, 32u);
 }
 
 TEST(TwoResolutions, TheRuntimeComposesTheBakesLightmapsBitForBit) {

@@ -153,8 +153,7 @@ Status traceDirect(Bake& b) {
                             b.options.direct, tr, b.progress);
   if (!st || !b.twoResolutions) return st;
   TexelSet& lightmap = b.result.texels;
-  buryLightmapTexels(b.scene, *b.tracer, lightmap, b.result.indirectTexels, b.options.links,
-                     b.progress);
+  buryLightmapTexels(*b.tracer, lightmap, b.options.links, b.progress);
   if (b.progress.cancelled()) return Status::error("cancelled");
   tr.lightmap.texelCount = lightmap.size();
   tr.lightmap.corners =

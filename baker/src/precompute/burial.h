@@ -18,13 +18,13 @@ namespace afterglow::baker {
 bool litCavity(const trace::RayTracer& tracer, const TexelSet& texels, uint32_t t);
 
 // Two resolutions: the gather finds the indirect grid's buried texels with its own rays; the
-// lightmap's texels cast none, so those near other geometry (TexelSet::nearGeometry) or next to
-// a grid texel the gather buried (an object standing on them) cast kBurialRays cosine rays here
-// and are judged by the gather's rule (LinkOptions::maxBackfaceFraction, maxEnclosedFraction).
-// Marks them invalid in `lightmap`; returns how many.
+// lightmap's texels cast none, so every valid one casts kBurialRays cosine rays here and is
+// judged by the gather's rule (LinkOptions::maxBackfaceFraction, maxEnclosedFraction). Not only
+// those near other geometry: a texel inside a wall whose grid texels' samples lie outside it
+// (Sponza's at 16 texels/m: up to all of its rays on back faces, not near geometry, its grid
+// corners valid) would read their light. Marks them invalid in `lightmap`; returns how many.
 constexpr int kBurialRays = 16;
-size_t buryLightmapTexels(const scenes::Scene& scene, const trace::RayTracer& tracer,
-                          TexelSet& lightmap, const TexelSet& indirect,
+size_t buryLightmapTexels(const trace::RayTracer& tracer, TexelSet& lightmap,
                           const LinkOptions& options, Progress& progress = nullProgress());
 
 }  // namespace afterglow::baker
