@@ -7,6 +7,7 @@
 
 #include "afterglow/scenes/gltf.h"
 #include "afterglow/scenes/procedural.h"
+#include "afterglow/uv/indirect.h"
 #include "afterglow/bakefiles/pipeline.h"
 #include "afterglow/trace/raytracer.h"
 #include "test_util.h"
@@ -99,6 +100,21 @@ scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColo
   inst.name = name;
   inst.mesh = 0;
   scene.instances.push_back(inst);
+  return scene;
+}
+
+scenes::Scene lampLitCornell(scenes::Light lamp, glm::vec3 where, bool grid) {
+  scenes::Scene scene = scenes::makeCornellBox();
+  for (scenes::Material& m : scene.materials) m.emissiveFactor = glm::vec3(0.0f);
+  const scenes::Bounds box = scene.bounds();
+  lamp.position = box.min + (box.max - box.min) * where;
+  scene.lights.push_back(lamp);
+  unwrapAt(scene, 60.0f);
+  uv::clearIndirect(scene);
+  if (grid) {
+    Result<uv::IndirectLayout> packed = uv::packIndirect(scene, 20.0f);
+    EXPECT_TRUE(packed) << packed.message();
+  }
   return scene;
 }
 

@@ -28,6 +28,10 @@ ReferenceTexels referenceOrDie(const scenes::Scene& scene, const TexelSet& texel
                                const std::vector<uint32_t>& subset);
 // A horizontal square of side 2 × halfSize at y = 0, facing +Y, of one material (a dielectric,
 // metallic 0: glTF's default is a metal) with this base colour and specularFactor.
+// The built-in Cornell box lit by `lamp` alone (its ceiling lamp's emission off), the lamp
+// placed at `where` (fractions of the box's bounds), unwrapped at 60 texels per metre; with
+// `grid`, an indirect grid at 20.
+scenes::Scene lampLitCornell(scenes::Light lamp, glm::vec3 where, bool grid);
 scenes::Scene groundQuad(const std::string& name, float halfSize, float baseColor,
                          float specularFactor = 1.0f);
 // Appends the quad a b c d (counter-clockwise seen from the side it faces) with normal n.

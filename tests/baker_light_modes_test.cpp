@@ -17,24 +17,13 @@ namespace {
 
 // The built-in Cornell box lit by a point light alone (its lamp's emission off).
 scenes::Scene lampLitBox(bool grid, scenes::LightMode mode) {
-  scenes::Scene scene = scenes::makeCornellBox();
-  for (scenes::Material& m : scene.materials) m.emissiveFactor = glm::vec3(0.0f);
   scenes::Light lamp;
   lamp.name = "lamp";
   lamp.type = scenes::LightType::Point;
-  const scenes::Bounds box = scene.bounds();
-  lamp.position = box.min + (box.max - box.min) * glm::vec3(0.4f, 0.8f, 0.5f);
   lamp.radius = 0.02f;
   lamp.intensity = 1.0f;
   lamp.mode = mode;
-  scene.lights.push_back(lamp);
-  unwrapAt(scene, 60.0f);
-  uv::clearIndirect(scene);
-  if (grid) {
-    Result<uv::IndirectLayout> packed = uv::packIndirect(scene, 20.0f);
-    EXPECT_TRUE(packed) << packed.message();
-  }
-  return scene;
+  return lampLitCornell(lamp, glm::vec3(0.4f, 0.8f, 0.5f), grid);
 }
 
 void expectOnlyBouncedLight(bool grid, scenes::LightMode mode, const char* what) {

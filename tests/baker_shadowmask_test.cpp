@@ -61,19 +61,9 @@ TEST(Shadowmask, OverlappingMixedLightsGetDifferentChannelsAtMostFour) {
 // The built-in Cornell box lit by one mixed point light of 5 cm radius (its lamp's emission
 // off): the blocks cast soft shadows.
 scenes::Scene mixedLampBox(bool grid) {
-  scenes::Scene scene = scenes::makeCornellBox();
-  for (scenes::Material& m : scene.materials) m.emissiveFactor = glm::vec3(0.0f);
-  const scenes::Bounds box = scene.bounds();
-  scenes::Light lamp = pointLight("lamp", box.min + (box.max - box.min) * glm::vec3(0.4f, 0.85f, 0.5f), 0);
+  scenes::Light lamp = pointLight("lamp", glm::vec3(0.0f), 0);
   lamp.radius = 0.05f;
-  scene.lights.push_back(lamp);
-  unwrapAt(scene, 60.0f);
-  uv::clearIndirect(scene);
-  if (grid) {
-    Result<uv::IndirectLayout> packed = uv::packIndirect(scene, 20.0f);
-    EXPECT_TRUE(packed) << packed.message();
-  }
-  return scene;
+  return lampLitCornell(lamp, glm::vec3(0.4f, 0.85f, 0.5f), grid);
 }
 
 // The visible fraction of a sphere light from point p: kRays shadow rays to points spread

@@ -37,8 +37,6 @@ bool buried(const trace::RayTracer& tracer, const TexelSet& texels, uint32_t t,
   const sampling::Frame frame(texels.normal[t]);
   const sampling::Rng::ItemSeed seed{sampling::Rng::itemSeed(sampling::Stream::Burial, t)};
   constexpr int kHalf = kBurialRays / 2;
-  const float backfaceLimit = options.maxBackfaceFraction * float(kBurialRays);
-  const float closeLimit = options.maxEnclosedFraction * float(kBurialRays);
   int backfaces = 0, close = 0;
   for (int half = 0; half < 2; ++half) {
     trace::Ray rays[kHalf];
@@ -60,10 +58,11 @@ bool buried(const trace::RayTracer& tracer, const TexelSet& texels, uint32_t t,
       if (!hit.frontFace && !tracer.material(hit).doubleSided) ++backfaces;
       if (hit.t < texels.edge[t]) ++close;
     }
-    if (float(backfaces) > backfaceLimit) return true;
-    if (half == 0 && backfaces == 0 && float(close) < 0.5f * closeLimit) return false;
+    if (insideAWall(backfaces, kBurialRays, options)) return true;
+    // Plainly clear: no back face, and not half the close hits the rule asks of all 16.
+    if (half == 0 && backfaces == 0 && !wedgedInAGap(2 * close, kBurialRays, options)) return false;
   }
-  return float(close) >= closeLimit && !litCavity(tracer, texels, t);
+  return wedgedInAGap(close, kBurialRays, options) && !litCavity(tracer, texels, t);
 }
 
 }  // namespace

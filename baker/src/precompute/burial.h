@@ -17,6 +17,17 @@ namespace afterglow::baker {
 // just below a ceiling). Such a cavity is lit, not buried.
 bool litCavity(const trace::RayTracer& tracer, const TexelSet& texels, uint32_t t);
 
+// The gather's burial rule on a texel's `rays` cosine rays (gather.cpp isBuried, and the
+// lightmap's texels below): inside a wall when more than maxBackfaceFraction of them met
+// single-sided back faces; wedged in a gap when at least maxEnclosedFraction met geometry
+// nearer than the texel's edge (unless a litCavity).
+inline bool insideAWall(int backfaces, int rays, const LinkOptions& options) {
+  return float(backfaces) > options.maxBackfaceFraction * float(rays);
+}
+inline bool wedgedInAGap(int close, int rays, const LinkOptions& options) {
+  return float(close) >= options.maxEnclosedFraction * float(rays);
+}
+
 // Two resolutions: the gather finds the indirect grid's buried texels with its own rays; the
 // lightmap's texels cast none, so every valid one casts kBurialRays cosine rays here and is
 // judged by the gather's rule (LinkOptions::maxBackfaceFraction, maxEnclosedFraction). Not only

@@ -259,9 +259,8 @@ TexelLookup lookupOf(const GatherInputs& in, const LightVisibility& lights,
 // below it, whose back glTF makes emit): there the cavity takes up a first-order share of the
 // lamp's power, and passes some of it on through the gap, so the texel stays.
 bool isBuried(const GatherInputs& in, uint32_t t, const GatherBatch::Summary& sum, uint32_t n) {
-  return float(sum.backfaces) > in.options.maxBackfaceFraction * float(n) ||
-         (float(sum.close) >= in.options.maxEnclosedFraction * float(n) &&
-          !litCavity(in.tracer, in.texels, t));
+  return insideAWall(sum.backfaces, int(n), in.options) ||
+         (wedgedInAGap(sum.close, int(n), in.options) && !litCavity(in.tracer, in.texels, t));
 }
 
 // What the first pass found per texel.
