@@ -69,9 +69,10 @@ const char kBakeHelp[] =
     "  --cluster-texels N       largest cluster edge in texels (default 4; 0: no limit)\n"
     "  --far-distance X         rays hitting a far cluster (4x a cluster's size) from beyond X\n"
     "                           of its radii link to it, not their cluster (default 2; 0: off)\n"
+    "  --far-levels N           far cluster levels, each 4x wider than the last (default 1)\n"
     "  --shared-far-span N      texels near other geometry within N texels on one surface pool\n"
     "                           their far-cluster rays into one shared row (default 4; 0: off)\n"
-    "  --shared-far-points X    rays a shared far row keeps, in gather points' rays (default 2)\n"
+    "  --shared-far-points X    rays a shared far row keeps, in gather points' rays (default 3)\n"
     "  --dilation N             texels each chart is grown into its padding (default 2)\n"
     "  --unit-scale X           the level's metres per unit (0.01: centimetres, 0.001:\n"
     "                           millimetres): scales the whole level first, as a root node\n"
@@ -117,7 +118,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"light-samples"},     {"emissive-samples"}, {"bounces"},
     {"indirect-intensity"}, {"albedo-boost"},    {"sky"},
     {"sky-image"},         {"cluster-size"},    {"cluster-texels"},
-    {"far-distance"},      {"shared-far-span"},  {"shared-far-points"}, {"dilation"},
+    {"far-distance"},      {"far-levels"},      {"shared-far-span"},  {"shared-far-points"}, {"dilation"},
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},       {"single-sided-emission", 0, false},
     {"probes"},            {"probe-spacing"},   {"max-probes"},  {"probe-dering"},
@@ -312,6 +313,7 @@ int runBake(int argc, char** argv, int first) {
                      &options.clusters.clusterTexels) ||
       !args.getFloat("far-distance", options.links.farDistance, 0.0f, 1e6f,
                      &options.links.farDistance) ||
+      !args.getInt("far-levels", options.clusters.farLevels, 0, 8, &options.clusters.farLevels) ||
       !args.getInt("shared-far-span", options.links.sharedFarSpan, 0, 1024,
                    &options.links.sharedFarSpan) ||
       !args.getFloat("shared-far-points", options.links.sharedFarPoints, 0.0f, 1e6f,
