@@ -6,9 +6,11 @@
 // each frame, composed in the engine's shader with the per-light direct layers (uploaded once)
 // and the light colours. --compose composes the lightmap on the CPU instead and uploads it.
 //
-// --no-probes leaves the light and reflection probes out of the frame.
+// --no-probes leaves the light and reflection probes out of the frame. --directional refreshes
+// the directional lightmaps' gradient atlases too (runtime/directional.h) and uploads them.
 //
 //   relight_loop OUT/transport.agt [--frames N] [--light NAME] [--compose] [--no-probes]
+//                [--directional]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -33,7 +35,7 @@ glm::vec3 hue(float h) {
 int usage() {
   std::fprintf(stderr,
                "usage: relight_loop OUT/transport.agt [--frames N] [--light NAME] [--compose] "
-               "[--no-probes]\n");
+               "[--no-probes] [--directional]\n");
   return 2;
 }
 
@@ -42,10 +44,12 @@ int usage() {
 int main(int argc, char** argv) {
   std::string path, lightName;
   int frames = 120;
-  bool compose = false, probes = true;
+  bool compose = false, probes = true, directional = false;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--compose") == 0) {
       compose = true;
+    } else if (std::strcmp(argv[i], "--directional") == 0) {
+      directional = true;
     } else if (std::strcmp(argv[i], "--no-probes") == 0) {
       probes = false;
     } else if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
@@ -105,6 +109,8 @@ int main(int argc, char** argv) {
   // would cost a frame many times over (issue 28 made them the default).
   perFrame.reflectionPasses = probes ? 1 : 0;
   perFrame.probes = probes;
+  perFrame.directional = directional;
+  std::vector<glm::vec3> gradientUpload;
   const glm::vec3 baseColor = rt->lightColor(light);
   const float brightness = std::max({baseColor.x, baseColor.y, baseColor.z, 1e-6f});
   std::vector<double> ms, lightmapMs;  // the whole update; its lightmaps' part (no probes)
@@ -118,6 +124,8 @@ int main(int argc, char** argv) {
         rt->readIndirectAtlas(a, gridUpload[size_t(a)]);
     else
       for (int a = 0; a < rt->atlasCount(); ++a) rt->readAtlas(a, upload[size_t(a)].data());
+    for (int a = 0; a < rt->directionalAtlasCount() && directional; ++a)
+      for (int axis = 0; axis < 3; ++axis) rt->readDirectionalAtlas(a, axis, gradientUpload);
     ms.push_back(s.milliseconds);
     std::printf("frame %4d  update %7.3f ms  (light change %.3f, bounce %.3f, atlases %.3f of which "
                 "compose %.3f, light probes %.3f, reflection %.3f ms)  change %.2e\n",

@@ -292,6 +292,7 @@ TEST(TwoResolutions, TheRuntimeComposesTheBakesLightmapsBitForBit) {
   ASSERT_TRUE(rt) << error;
   runtime::UpdateOptions update;
   update.fromScratch = true;
+  update.directional = true;
   rt->update(update);
   ASSERT_EQ(size_t(rt->atlasCount()), p.two.lightmaps.size());
   ASSERT_EQ(size_t(rt->texelCount()), p.two.texels.size());
@@ -303,6 +304,23 @@ TEST(TwoResolutions, TheRuntimeComposesTheBakesLightmapsBitForBit) {
     for (size_t i = 0; i < image.size(); ++i) differing += image[i] != p.two.lightmaps[size_t(a)][i];
   }
   EXPECT_EQ(differing, 0u);
+  // The directional lightmaps' gradients on the grid too (directional.h).
+  ASSERT_EQ(size_t(rt->directionalAtlasCount()), p.two.directionalLightmaps.size());
+  ASSERT_GT(rt->directionalAtlasCount(), 0);
+  size_t gradients = 0, nonZero = 0;
+  for (int a = 0; a < rt->directionalAtlasCount(); ++a)
+    for (int axis = 0; axis < 3; ++axis) {
+      std::vector<glm::vec3> image;
+      ASSERT_TRUE(rt->readDirectionalAtlas(a, axis, image));
+      const std::vector<glm::vec3>& baked = p.two.directionalLightmaps[size_t(a)][size_t(axis)];
+      ASSERT_EQ(image.size(), baked.size());
+      for (size_t i = 0; i < image.size(); ++i) {
+        gradients += image[i] != baked[i];
+        nonZero += baked[i] != glm::vec3(0.0f);
+      }
+    }
+  EXPECT_EQ(gradients, 0u);
+  EXPECT_GT(nonZero, 0u);
 }
 
 }  // namespace

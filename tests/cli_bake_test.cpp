@@ -104,8 +104,11 @@ TEST(CliBake, CornellWritesLightmapsGltfAndReport) {
   const std::string out = bakedCornell();
   const std::vector<std::string> files = tree(out);
   // A default bake proposes a reflection probe for the room, so the sky's specular images
-  // (EXT_lights_image_based: 7 mips of 6 faces) and the probes' cube EXRs come too.
+  // (EXT_lights_image_based: 7 mips of 6 faces) and the probes' cube EXRs come too; the
+  // directional lightmaps are on by default.
   std::vector<std::string> expected = {"lightmaps/lightmap0.exr", "lightmaps/lightmap0.png",
+                                       "lightmaps/lightmap0_dx.exr", "lightmaps/lightmap0_dy.exr",
+                                       "lightmaps/lightmap0_dz.exr",
                                        "probes/dfg.exr", "probes/light_probes.json",
                                        "probes/light_probes_sh.bin", "probes/reflection_1.exr",
                                        "probes/reflection_probes.json",

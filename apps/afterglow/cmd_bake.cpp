@@ -80,6 +80,10 @@ const char kBakeHelp[] =
     "                           volumes and reflection probes too); the outputs are in metres\n"
     "                           (default 1; the bake warns when the level looks like it is not\n"
     "                           in metres)\n"
+    "  --no-directional         no directional lightmaps (default: lightmaps/*_dx.exr, _dy,\n"
+    "                           _dz hold the bounced light's change with the shading normal,\n"
+    "                           for normal maps; extras.afterglow.directional says how to read\n"
+    "                           them)\n"
     "  --single-sided-emission  double-sided emissive materials emit from their front only\n"
     "                           (default: both sides, as glTF says); written on the output's\n"
     "                           materials as extras.afterglow.singleSidedEmission\n"
@@ -121,6 +125,7 @@ const std::vector<OptionSpec> kBakeOptions = {
     {"far-distance"},      {"far-levels"},      {"shared-far-span"},  {"shared-far-points"}, {"dilation"},
     {"threads"},           {"settings"},        {"memory-budget"},
     {"reference", 0, false}, {"spp"},       {"single-sided-emission", 0, false},
+    {"no-directional", 0, false},
     {"probes"},            {"probe-spacing"},   {"max-probes"},  {"probe-dering"},
     {"reflection-bounces"}, {"reflection-probes"}, kUnitScaleOption,
     {"yes", 'y', false},   {"quiet", 0, false}, {"help", 'h', false}};
@@ -149,7 +154,7 @@ bool settingsArguments(const std::string& path, std::vector<std::string>* out,
     std::string value;
     if (v.is_boolean()) {
       if (key != "yes" && key != "quiet" && key != "reference" &&
-          key != "single-sided-emission") {
+          key != "single-sided-emission" && key != "no-directional") {
         *error = path + ": '" + key + "' is not a flag";
         return false;
       }
@@ -347,6 +352,7 @@ int runBake(int argc, char** argv, int first) {
     return command.usage("--uv wants generate or keep, got '" + mode + "'");
   job.overBudget = args.has("yes");
   job.singleSidedEmission = args.has("single-sided-emission");
+  options.directional = !args.has("no-directional");
   const bool quiet = args.has("quiet");
   setThreadCount(threads);
 

@@ -69,6 +69,8 @@ const char kRenderHelp[] =
     "  --sphere-at X,Y,Z,R      a diffuse sphere of radius R at X,Y,Z (metres) lit by the light\n"
     "                           probes there, as --probe-spheres draws them; repeatable, and\n"
     "                           with --probe-spheres drawn besides its spheres\n"
+    "  --no-directional         ignore the directional lightmaps (default: normal textures tilt\n"
+    "                           the normal the bounced light is read at, as an engine does)\n"
     "  --reference              path-trace the view instead of reading the lightmaps (slow)\n"
     "  --spp N                  paths per pixel for --reference (default 256)\n"
     "  --threads N              worker threads (default: every core); the picture is\n"
@@ -95,7 +97,8 @@ bool hasLightmapLayout(const scenes::Scene& scene) {
 // Loaded before the (slower) ray tracer so that bad inputs fail fast. Returns the exit code.
 int loadShading(const std::string& input, const scenes::Scene& scene, bool reference, bool quiet,
                 baker::Environment* environment, std::vector<bakefiles::LightmapImage>* lightmaps,
-                bakefiles::BakedReflections* reflections) {
+                bakefiles::BakedReflections* reflections,
+                bakefiles::BakedDirectional* directional) {
   if (!reference) {
     Result<std::vector<bakefiles::LightmapImage>> loaded = bakefiles::loadBakedLightmaps(input);
     if (!loaded) {
@@ -109,6 +112,14 @@ int loadShading(const std::string& input, const scenes::Scene& scene, bool refer
       return kExitBadInput;
     }
     *reflections = std::move(probes.value());
+    if (directional) {
+      Result<bakefiles::BakedDirectional> gradients = bakefiles::loadBakedDirectional(input);
+      if (!gradients) {
+        printError(gradients.message());
+        return kExitBadInput;
+      }
+      *directional = std::move(gradients.value());
+    }
     return kExitOk;
   }
   if (!hasLightmapLayout(scene)) {
@@ -201,6 +212,7 @@ int runRender(int argc, char** argv, int first) {
                                              {"exposure"},
                                              {"threads"},
                                              {"reference", 0, false},
+                                             {"no-directional", 0, false},
                                              {"probe-spheres", 0, true, isSphereCount},
                                              {"sphere-at"},
                                              {"spp"},
@@ -279,7 +291,10 @@ int runRender(int argc, char** argv, int first) {
   InterruptGuard guard(progress);
 
   int code = kExitOk;
-  Result<scenes::Scene> loaded = loadSceneOrExit(input, true, &code);
+  // Normal textures tilt the directional lightmaps' normals (not with --reference, which has
+  // no lightmaps, nor --no-directional).
+  Result<scenes::Scene> loaded =
+      loadSceneOrExit(input, true, &code, !args.has("reference") && !args.has("no-directional"));
   if (!loaded) return code;
   const scenes::Scene& scene = loaded.value();
   const bool reference = args.has("reference");
@@ -287,8 +302,9 @@ int runRender(int argc, char** argv, int first) {
   baker::Environment environment;
   std::vector<bakefiles::LightmapImage> lightmaps;
   bakefiles::BakedReflections reflections;
+  bakefiles::BakedDirectional directional;
   if (int code = loadShading(input, scene, reference, quiet, &environment, &lightmaps,
-                             &reflections);
+                             &reflections, args.has("no-directional") ? nullptr : &directional);
       code != kExitOk)
     return code;
   bakefiles::LightProbes lightProbes;
@@ -355,7 +371,7 @@ int runRender(int argc, char** argv, int first) {
                                                                         : kReferenceReflections,
                                          progress)
                 : preview::renderBaked(scene, *tracer.value(), lightmaps, view, options, progress,
-                                     spheres, &reflections);
+                                     spheres, &reflections, &directional);
   if (interrupted() || progress.cancelled()) return interruptedExit();
   if (!image) {
     printError(image.message());

@@ -72,7 +72,7 @@ namespace {
 
 // *usageError is set when the argument itself is wrong rather than the file.
 Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextures,
-                                        bool* usageError) {
+                                        bool loadNormalTextures, bool* usageError) {
   *usageError = false;
   if (isBuiltinScene(scene)) {
     std::string name = scene.substr(sizeof(kBuiltinPrefix) - 1);
@@ -86,15 +86,18 @@ Result<scenes::Scene> loadSceneArgument(const std::string& scene, bool loadTextu
   }
   scenes::LoadOptions options;
   options.loadTextures = loadTextures;
+  options.loadNormalTextures = loadTextures && loadNormalTextures;
+  options.loadIndirectUvs = loadNormalTextures;
   return scenes::loadGltf(scene, options);
 }
 
 }  // namespace
 
 Result<scenes::Scene> loadSceneOrExit(const std::string& scene, bool loadTextures,
-                                      int* exitCode) {
+                                      int* exitCode, bool loadNormalTextures) {
   bool badArgument = false;
-  Result<scenes::Scene> loaded = loadSceneArgument(scene, loadTextures, &badArgument);
+  Result<scenes::Scene> loaded =
+      loadSceneArgument(scene, loadTextures, loadNormalTextures, &badArgument);
   if (interrupted()) {
     *exitCode = interruptedExit();
     return Status::error("interrupted");

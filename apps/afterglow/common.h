@@ -51,9 +51,11 @@ bool isBuiltinScene(const std::string& scene);
 // Loads a .gltf/.glb path or a built-in scene for a command. On failure (printed) *exitCode says
 // how to stop: kExitInterrupted for a Ctrl-C during the load (checked first: a large level loads
 // a while and the load itself is not interrupted), kExitUsage when the argument itself is wrong
-// (an unknown built-in name), kExitBadInput when the file is.
+// (an unknown built-in name), kExitBadInput when the file is. loadNormalTextures decodes the
+// normal textures and reads a baked indirect grid's UVs too (scenes::LoadOptions), for reading
+// directional lightmaps.
 Result<scenes::Scene> loadSceneOrExit(const std::string& scene, bool loadTextures,
-                                      int* exitCode);
+                                      int* exitCode, bool loadNormalTextures = false);
 
 // `--unit-scale X`, in the option list of every command that reads a level for its geometry
 // (info, bake, probes place): the level's metres per unit.

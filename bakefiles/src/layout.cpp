@@ -14,6 +14,11 @@ std::string lightmapPng(size_t atlas) {
   return std::string(kLightmapsDir) + "/lightmap" + std::to_string(atlas) + ".png";
 }
 
+std::string directionalExr(size_t atlas, int axis, bool grid) {
+  return std::string(kLightmapsDir) + (grid ? "/indirect" : "/lightmap") + std::to_string(atlas) +
+         "_d" + "xyz"[axis] + ".exr";
+}
+
 std::string indirectExr(size_t atlas) {
   return std::string(kLightmapsDir) + "/indirect" + std::to_string(atlas) + ".exr";
 }

@@ -99,6 +99,39 @@ Result<std::vector<LightmapImage>> loadBakedLightmaps(const std::string& gltfPat
   return images;
 }
 
+Result<BakedDirectional> loadBakedDirectional(const std::string& gltfPath) {
+  Result<std::string> text = readFile(gltfPath);
+  if (!text) return text.status();
+  const json doc = json::parse(text.value(), nullptr, false);
+  if (doc.is_discarded()) return Status::error(gltfPath + ": not valid JSON");
+  BakedDirectional out;
+  if (!doc.contains("extras") || !doc["extras"].contains("afterglow") ||
+      !doc["extras"]["afterglow"].contains("directional"))
+    return out;
+  const json& d = doc["extras"]["afterglow"]["directional"];
+  const std::string where = gltfPath + ": extras.afterglow.directional";
+  if (!d.is_object() || !d.contains("atlases") || !d["atlases"].is_array())
+    return Status::error(where + " has no list of atlases");
+  const json texCoord = d.value("texCoord", json(1));
+  if (!texCoord.is_number_integer() || (texCoord.get<int>() != 1 && texCoord.get<int>() != 2))
+    return Status::error(where + ": texCoord is not 1 or 2");
+  out.texCoord = texCoord.get<int>();
+  const fs::path dir = fs::path(gltfPath).parent_path();
+  for (const json& entry : d["atlases"]) {
+    std::array<LightmapImage, 3>& images = out.atlases.emplace_back();
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string key(1, "xyz"[axis]);
+      if (!entry.is_object() || !entry.contains(key) || !entry[key].is_string())
+        return Status::error(where + ": atlas " + std::to_string(out.atlases.size() - 1) +
+                             " names no '" + key + "' image");
+      Result<LightmapImage> img = readLinearImage((dir / entry[key].get<std::string>()).string());
+      if (!img) return img.status();
+      images[size_t(axis)] = std::move(img.value());
+    }
+  }
+  return out;
+}
+
 Result<BakedReflections> loadBakedReflections(const std::string& gltfPath) {
   BakedReflections out;
   const std::string dir = fs::path(gltfPath).parent_path().string();

@@ -283,9 +283,16 @@ std::optional<RelightError> copyBuffers(const json& gltf, const std::string& bak
   return std::nullopt;
 }
 
+// Whether the bake wrote directional lightmaps (its glTF names them): the relit folder has them
+// too, as the glTF it copies names them.
+bool hasDirectional(const RelitBake& bake) {
+  const json* extras = bake.gltf.contains("extras") ? &bake.gltf["extras"] : nullptr;
+  return extras && extras->contains("afterglow") && (*extras)["afterglow"].contains("directional");
+}
+
 // The relit lightmaps (and the indirect grid's atlases, with two resolutions); returns
 // report.json's "atlases" and "indirectAtlases".
-Result<std::pair<json, json>> writeRelitLightmaps(const runtime::Runtime& rt,
+Result<std::pair<json, json>> writeRelitLightmaps(const runtime::Runtime& rt, bool directional,
                                                   const std::string& outDir, AtomicOutput& out) {
   std::vector<std::vector<glm::vec3>> images(size_t(rt.atlasCount()));
   for (int a = 0; a < rt.atlasCount(); ++a) rt.readAtlas(a, images[size_t(a)]);
@@ -300,6 +307,16 @@ Result<std::pair<json, json>> writeRelitLightmaps(const runtime::Runtime& rt,
         writeLightmaps(rt.data().atlases, grid, outDir, out, written, AtlasKind::Indirect);
     if (!gridFiles) return gridFiles.status();
     gridAtlases = gridFiles.value();
+  }
+  if (directional) {
+    std::vector<std::array<std::vector<glm::vec3>, 3>> images(size_t(rt.directionalAtlasCount()));
+    for (int a = 0; a < rt.directionalAtlasCount(); ++a)
+      for (int axis = 0; axis < 3; ++axis)
+        rt.readDirectionalAtlas(a, axis, images[size_t(a)][size_t(axis)]);
+    Result<json> files = writeDirectionalLightmaps(rt.data().atlases, images,
+                                                   rt.data().lightmap.active(), outDir, out,
+                                                   written);
+    if (!files) return files.status();
   }
   return std::make_pair(atlases.value(), gridAtlases);
 }
@@ -387,6 +404,7 @@ std::optional<RelightError> relightBake(RelitBake& bake) {
   update.maxBounces = bake.bounces;
   update.fromScratch = true;
   update.reflectionPasses = -1;
+  update.directional = hasDirectional(bake);
   bake.stats = bake.runtime->update(update);
   if (bake.runtime->probeCount() == 0) return std::nullopt;
   Result<std::optional<RelitLightProbes>> probes = relightProbes(bake);
@@ -397,7 +415,8 @@ std::optional<RelightError> relightBake(RelitBake& bake) {
 
 std::optional<RelightError> writeRelitFolder(const RelitBake& bake, const std::string& outDir,
                                              AtomicOutput& out) {
-  Result<std::pair<json, json>> atlases = writeRelitLightmaps(*bake.runtime, outDir, out);
+  Result<std::pair<json, json>> atlases =
+      writeRelitLightmaps(*bake.runtime, hasDirectional(bake), outDir, out);
   if (!atlases) return failedOutput(atlases.status());
   json gltf = bake.gltf;
   pointImagesBack(gltf, bake.dir, outDir);

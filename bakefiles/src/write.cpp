@@ -168,6 +168,33 @@ Result<json> writeLightmaps(const std::vector<runtime::AtlasLayout>& layouts,
   return atlases;
 }
 
+Result<json> writeDirectionalLightmaps(
+    const std::vector<runtime::AtlasLayout>& layouts,
+    const std::vector<std::array<std::vector<glm::vec3>, 3>>& images, bool grid,
+    const std::string& outDir, AtomicOutput& out, std::vector<std::string>& written) {
+  json list = json::array();
+  for (size_t a = 0; a < images.size() && a < layouts.size(); ++a) {
+    json files = json::object();
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::string name = directionalExr(a, axis, grid);
+      const std::string path = inFolder(outDir, name);
+      if (Status s = writeExr(path, layouts[a].width, layouts[a].height, images[a][size_t(axis)],
+                              out, ExrPixels::Half);
+          !s)
+        return s;
+      written.push_back(path);
+      files[std::string(1, "xyz"[axis])] = name;
+    }
+    list.push_back(files);
+  }
+  return json{{"atlases", list},
+              {"texCoord", grid ? 2 : 1},
+              {"decode", "per channel, r = (dx*(n-n0).x + dy*(n-n0).y + dz*(n-n0).z) / lightmap, "
+                         "E(n)/pi = lightmap * (r < -0.5 ? exp(2r + 1) / 2 : min(1 + r, 2)): n the shading "
+                         "(normal-mapped) normal, n0 the interpolated vertex normal, world axes; "
+                         "d* the bounced light's gradient with the normal"}};
+}
+
 Status writeLightProbes(const std::string& outDir, const ProbeSet& set,
                         const std::vector<runtime::ShL2>& sh,
                         const runtime::ProbeDirectionList& directions,
@@ -270,6 +297,15 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
                   {"channels", channels}};
   }
 
+  json directional = nullptr;
+  if (!result.directionalLightmaps.empty()) {
+    Result<json> files =
+        writeDirectionalLightmaps(result.transport.atlases, result.directionalLightmaps,
+                                  result.transport.lightmap.active(), outDir, out, written);
+    if (!files) return files.status();
+    directional = files.value();
+  }
+
   Result<SavedGltf> saved = saveAndReadGltf(scene, outDir);
   if (!saved) return saved.status();
   json& doc = saved->doc;
@@ -278,6 +314,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   // direct light's layers are in the transport).
   if (!indirectAtlases.empty()) doc["extras"]["afterglow"]["indirectLightmaps"] = indirectAtlases;
   if (!shadowmask.is_null()) doc["extras"]["afterglow"]["shadowmask"] = shadowmask;
+  if (!directional.is_null()) doc["extras"]["afterglow"]["directional"] = directional;
   if (Status s = writeReflectionOutputs(result.transport, result.reflectionChains, result.dfg,
                                         outDir, doc, out, written);
       !s)
@@ -367,6 +404,7 @@ Result<std::vector<std::string>> writeBakeOutputs(const scenes::Scene& scene,
   report["stageRays"] = stageRays;
   report["transport"] = transportInfo;
   if (!shadowmask.is_null()) report["shadowmask"] = shadowmask;
+  if (!directional.is_null()) report["directional"] = directional;
   report["probes"] = {{"count", result.transport.probes.count()},
                       {"tetrahedra", result.transport.probes.mesh.tetrahedra.size()},
                       {"links", result.transport.probes.links.linkCount()},

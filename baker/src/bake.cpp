@@ -16,6 +16,7 @@
 #include "afterglow/core/parallel.h"
 #include "afterglow/core/timer.h"
 #include "afterglow/runtime/reflection_prefilter.h"
+#include "afterglow/runtime/directional.h"
 #include "afterglow/runtime/solver.h"
 #include "afterglow/trace/raytracer.h"
 #include "post/lightmap_post.h"
@@ -40,6 +41,7 @@ struct Bake {
   BakeResult result;
   bool twoResolutions = false;   // hasIndirectGrid(scene)
   std::vector<glm::vec3> grid;   // two resolutions: the grid texels' sky and bounced light
+  std::vector<runtime::LightGradient> gradient;  // directional: per transport texel
   // The texels the transport is solved on: the indirect grid's, or the lightmap's.
   TexelSet& solveTexels() { return twoResolutions ? result.indirectTexels : result.texels; }
 };
@@ -224,6 +226,12 @@ Status solve(Bake& b) {
       solver.lightmapDirect(b.result.texelDirect.data());
       solver.upsampleIndirect(grid.data(), b.result.texelIndirect.data());
     }
+    if (b.options.directional && tr.hasDirections()) {
+      runtime::DirectionalLight directional(tr);
+      directional.setParallelFor(blockRanges());
+      b.gradient.resize(tr.texelCount);
+      directional.texels(solver, b.gradient.data());
+    }
     b.result.probeSh.resize(solver.probeCount());
     solver.probeRadiance(0, b.result.probeSh.size(), b.result.probeSh.data());
   }
@@ -264,6 +272,19 @@ Status dilate(Bake& b) {
     } else if (!b.options.reference) {
       r.transport.atlases = r.texels.atlases;
     }
+  }
+  if (!b.gradient.empty()) {
+    // The gradients through the transport's atlases (the grid's or the lightmap's), as its
+    // light: the runtime resolves its own alike.
+    std::vector<glm::vec3> axis(b.gradient.size());
+    for (const runtime::AtlasLayout& layout : r.transport.atlases) {
+      std::array<std::vector<glm::vec3>, 3>& images = r.directionalLightmaps.emplace_back();
+      for (int a = 0; a < 3; ++a) {
+        for (size_t t = 0; t < axis.size(); ++t) axis[t] = b.gradient[t].axis[a];
+        runtime::resolveAtlas(layout, axis, images[size_t(a)]);
+      }
+    }
+    b.gradient = {};
   }
   if (!b.options.reference) {
     std::vector<std::string> overflow;

@@ -1,5 +1,7 @@
 #include "afterglow/runtime/runtime.h"
 
+#include "afterglow/runtime/directional.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -87,6 +89,7 @@ Runtime::~Runtime() = default;
 
 void Runtime::setParallelFor(ParallelFor parallelFor) {
   std::lock_guard<std::mutex> lock(updateMutex_);
+  parallelFor_ = parallelFor;
   solver_->setParallelFor(std::move(parallelFor));
 }
 
@@ -374,6 +377,7 @@ UpdateStats Runtime::update(const UpdateOptions& options) {
     std::lock_guard<std::mutex> lock(outputMutex_);
     front_ = back;
   }
+  if (options.directional && data_.hasDirections()) refreshDirectional();
   lastOutputMs_ = stats.outputMilliseconds = millisecondsSince(outputStart);
   if (options.probes && !probeWork_.empty()) {
     const Clock::time_point probeStart = Clock::now();
@@ -529,6 +533,43 @@ bool Runtime::readIndirectAtlas(int atlas, std::vector<glm::vec3>& image) const 
   if (atlas < 0 || atlas >= indirectAtlasCount()) return false;
   std::lock_guard<std::mutex> lock(outputMutex_);
   image = gridImages_[gridFront_][size_t(atlas)];
+  return true;
+}
+
+void Runtime::refreshDirectional() {
+  if (!directional_) {
+    directional_ = std::make_unique<DirectionalLight>(data_);
+    gradient_.resize(data_.texelCount);
+    for (std::vector<glm::vec3>& axis : gradientAxis_) axis.resize(data_.texelCount);
+    for (int b = 0; b < 2; ++b)
+      for (const AtlasLayout& layout : data_.atlases)
+        for (int axis = 0; axis < 3; ++axis)
+          directionalImages_[b].emplace_back(size_t(layout.width) * size_t(layout.height),
+                                             glm::vec3(0.0f));
+  }
+  directional_->setParallelFor(parallelFor_);
+  directional_->texels(*solver_, gradient_.data());
+  for (size_t t = 0; t < gradient_.size(); ++t)
+    for (int axis = 0; axis < 3; ++axis) gradientAxis_[axis][t] = gradient_[t].axis[axis];
+  const int back = 1 - directionalFront_;
+  for (size_t a = 0; a < data_.atlases.size(); ++a)
+    for (int axis = 0; axis < 3; ++axis)
+      refreshAtlas(data_.atlases[a], gradientAxis_[axis], directionalImages_[back][a * 3 + size_t(axis)]);
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  directionalFront_ = back;
+}
+
+int Runtime::directionalAtlasCount() const {
+  return data_.hasDirections() ? int(data_.atlases.size()) : 0;
+}
+
+bool Runtime::readDirectionalAtlas(int atlas, int axis, std::vector<glm::vec3>& image) const {
+  if (atlas < 0 || atlas >= directionalAtlasCount() || axis < 0 || axis > 2) return false;
+  const AtlasLayout& layout = data_.atlases[size_t(atlas)];
+  std::lock_guard<std::mutex> lock(outputMutex_);
+  const std::vector<std::vector<glm::vec3>>& images = directionalImages_[directionalFront_];
+  if (images.empty()) image.assign(size_t(layout.width) * size_t(layout.height), glm::vec3(0.0f));
+  else image = images[size_t(atlas) * 3 + size_t(axis)];
   return true;
 }
 

@@ -236,7 +236,8 @@ size_t TransportData::memoryBytes() const {
              bytesOf(farClusters) + bytesOf(clusterGather) + bytesOf(pointFilter) +
              bytesOf(texelGather) + bytesOf(texelPoint) + bytesOf(texelNeighbours) +
              bytesOf(texelSky) + bytesOf(clusterSky) + bytesOf(clusterMaterial) +
-             bytesOf(clusterAlbedoTexture) + bytesOf(clusterEmissionTexture);
+             bytesOf(clusterAlbedoTexture) + bytesOf(clusterEmissionTexture) +
+             bytesOf(clusterPosition) + bytesOf(pointPosition) + bytesOf(pointNormal);
   for (const Source& s : sources)
     b += bytesOf(s.texelTransfer) + bytesOf(s.clusterTransfer) + bytesOf(s.probeTransfer);
   b += probeBytes() + reflectionBytes() + lightmap.memoryBytes();
@@ -314,6 +315,28 @@ std::string TransportData::validate() const {
           << materials.size();
       return why.str();
     }
+  if (hasDirections() || !clusterPosition.empty() || !pointNormal.empty()) {
+    if (clusterPosition.size() != clusters || pointPosition.size() != points ||
+        pointNormal.size() != points) {
+      why << "directions: " << clusterPosition.size() << " cluster positions and "
+          << pointPosition.size() << " gather point positions and " << pointNormal.size()
+          << " normals, for " << clusters << " clusters and " << points << " gather points";
+      return why.str();
+    }
+    auto finite = [](glm::vec3 v) {
+      return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    };
+    for (size_t c = 0; c < clusters; ++c)
+      if (!finite(clusterPosition[c])) {
+        why << "directions: cluster " << c << " has a position that is not finite";
+        return why.str();
+      }
+    for (size_t p = 0; p < points; ++p)
+      if (!finite(pointPosition[p]) || !finite(pointNormal[p])) {
+        why << "directions: gather point " << p << " has a position or normal that is not finite";
+        return why.str();
+      }
+  }
   if (!texelSky.empty() && texelSky.size() != texels * kShCount) return "texel sky transfer size";
   if (!clusterSky.empty() && clusterSky.size() != clusters * kShCount)
     return "cluster sky transfer size";

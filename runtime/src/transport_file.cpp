@@ -68,10 +68,11 @@ constexpr const char* kClusterSky = "CSKY";
 constexpr const char* kProbes = "PROB";
 constexpr const char* kReflections = "REFL";
 constexpr const char* kLightmap = "LAYR";
+constexpr const char* kGeometry = "GEOM";
 constexpr const char* kRequired[] = {kInfo,      kAtlases,      kMaterials,   kSources,
                                      kClusters,  kFarClusters,  kSharedFar,   kLinks,
                                      kClusterGather, kGatherMaps, kTexelSky,  kClusterSky,
-                                     kProbes,    kReflections,  kLightmap};
+                                     kProbes,    kReflections,  kLightmap,    kGeometry};
 constexpr size_t kSectionCount = sizeof(kRequired) / sizeof(kRequired[0]);
 
 constexpr size_t kEntrySize = 32;    // one section table entry
@@ -271,6 +272,12 @@ const SectionWriter kWriters[] = {
        for (const std::vector<uint16_t>& direct : l.direct) o.array(direct);
        o.array(l.directScale);
      }},
+    {kGeometry, 0,
+     [](const TransportData& d, Out& o) {
+       o.array(d.clusterPosition);
+       o.array(d.pointPosition);
+       o.array(d.pointNormal);
+     }},
 };
 static_assert(sizeof(kWriters) / sizeof(kWriters[0]) == kSectionCount, "");
 
@@ -290,6 +297,7 @@ uint64_t sectionCount(const TransportData& d, const char* id) {
   if (id == kProbes) return d.probes.count();
   if (id == kReflections) return d.reflections.count();
   if (id == kLightmap) return d.lightmap.texelCount;
+  if (id == kGeometry) return d.pointPosition.size();
   return d.clusterSky.size();  // kClusterSky
 }
 
@@ -534,6 +542,16 @@ bool readSection(const char* id, In& in, TransportData& d, uint64_t count) {
       }
     return in.array(l.directScale, "direct light scales");
   }
+  if (id == kGeometry) {
+    if (!in.array(d.clusterPosition, "cluster positions") ||
+        !in.array(d.pointPosition, "gather point positions") ||
+        !in.array(d.pointNormal, "gather point normals"))
+      return false;
+    if (count != d.pointPosition.size())
+      return in.fail("the table says " + std::to_string(count) + " gather points, the section has " +
+                     std::to_string(d.pointPosition.size()));
+    return true;
+  }
   const std::vector<uint32_t>* rowStart = nullptr;
   if (id == kLinks || id == kSharedFar) {
     SparseLinks& m = id == kLinks ? d.links : d.sharedFar;
@@ -584,6 +602,7 @@ const char* sectionOfComplaint(const std::string& why) {
     const char* prefix;
     const char* id;
   } kPrefixes[] = {{"lightmap layers", kLightmap},
+                   {"directions", kGeometry},
                    {"reflection", kReflections},
                    {"probe", kProbes},
                    {"links", kLinks},

@@ -324,7 +324,10 @@ struct Exporter {
         pbr["metallicRoughnessTexture"] = std::move(t);
       json jm = {{"pbrMetallicRoughness", std::move(pbr)}};
       if (!mat.name.empty()) jm["name"] = mat.name;
-      if (json t = textureInfo(mat.normalTexture); !t.is_null()) jm["normalTexture"] = t;
+      if (json t = textureInfo(mat.normalTexture); !t.is_null()) {
+        if (mat.normalScale != 1.0f) t["scale"] = num(mat.normalScale);
+        jm["normalTexture"] = t;
+      }
       if (json t = textureInfo(mat.occlusionTexture); !t.is_null()) jm["occlusionTexture"] = t;
       if (json t = textureInfo(mat.emissiveTexture); !t.is_null()) jm["emissiveTexture"] = t;
       if (mat.emissiveFactor != glm::vec3(0.0f)) jm["emissiveFactor"] = vec(mat.emissiveFactor);
@@ -406,6 +409,10 @@ struct Exporter {
         ag["lightmap"] = {{"atlas", inst.lightmap.atlas},
                           {"width", inst.lightmap.width},
                           {"height", inst.lightmap.height}};
+      if (inst.indirectLightmap.atlas >= 0)
+        ag["indirectLightmap"] = {{"atlas", inst.indirectLightmap.atlas},
+                                  {"width", inst.indirectLightmap.width},
+                                  {"height", inst.indirectLightmap.height}};
       if (!ag.empty()) node["extras"]["afterglow"] = std::move(ag);
       nodes.push_back(std::move(node));
     }

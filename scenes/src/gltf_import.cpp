@@ -9,7 +9,8 @@
 // - Scene::textures holds one entry per (glTF image, colour space) pair that materials use: an
 //   image used as base colour (sRGB) and as metallic-roughness (linear) is decoded twice.
 // - Normal and occlusion textures are kept as references (name, URI) for the exporter but are not
-//   decoded: nothing in afterglow samples them, and decoding them would double load time.
+//   decoded: the bake samples neither, and decoding them would double load time. `render`
+//   decodes the normal textures (LoadOptions::loadNormalTextures) for directional lightmaps.
 // - Only the meshes that the selected scene instantiates are imported.
 // - Instances with a negative-determinant transform keep their data as stored; their world-space
 //   winding is flipped, which later stages detect from the determinant.
@@ -703,6 +704,10 @@ class Importer {
     if (!s) return s;
     s = readAttribute("TEXCOORD_1", 2, out.uv1);
     if (!s) return s;
+    if (options_.loadIndirectUvs) {
+      s = readAttribute("TEXCOORD_2", 2, out.indirectUv);
+      if (!s) return s;
+    }
 
     // Indices (or the implicit 0..n-1), then strips and fans become lists.
     std::vector<uint32_t> order;
@@ -977,9 +982,10 @@ class Importer {
                      where + " emissiveTexture", true, true, m.emissiveTexture);
       if (!s) return s;
       s = textureRef(src.normalTexture.index, src.normalTexture.texCoord,
-                         src.normalTexture.extensions, where + " normalTexture", false, false,
-                         m.normalTexture);
+                         src.normalTexture.extensions, where + " normalTexture", false,
+                         options_.loadNormalTextures, m.normalTexture);
       if (!s) return s;
+      if (m.normalTexture.valid()) m.normalScale = float(src.normalTexture.scale);
       s = textureRef(src.occlusionTexture.index, src.occlusionTexture.texCoord,
                          src.occlusionTexture.extensions, where + " occlusionTexture", false, false,
                          m.occlusionTexture);
@@ -1305,10 +1311,11 @@ class Importer {
   }
 
   // extras.afterglow.lightmap: where `afterglow uv` put this node's lightmap (not inherited).
-  LightmapLocation readLightmap(const tinygltf::Node& node, const std::string& where) {
+  LightmapLocation readLightmap(const tinygltf::Node& node, const std::string& where,
+                                const char* key = "lightmap") {
     LightmapLocation location;
     const tinygltf::Value* ag = member(node.extras, "afterglow");
-    const tinygltf::Value* lm = ag ? member(*ag, "lightmap") : nullptr;
+    const tinygltf::Value* lm = ag ? member(*ag, key) : nullptr;
     if (!lm) return location;
     const tinygltf::Value* atlas = member(*lm, "atlas");
     const tinygltf::Value* width = member(*lm, "width");
@@ -1319,8 +1326,8 @@ class Importer {
       location.width = width->GetNumberAsInt();
       location.height = height->GetNumberAsInt();
     } else {
-      warn(where + ": extras.afterglow.lightmap needs integers atlas >= 0, width > 0, height > 0; "
-                   "ignored");
+      warn(where + ": extras.afterglow." + key + " needs integers atlas >= 0, width > 0, "
+                   "height > 0; ignored");
     }
     return location;
   }
@@ -1491,6 +1498,8 @@ class Importer {
         inst.lightmapScale = settings.lightmapScale;
         inst.castShadows = settings.castShadows;
         inst.lightmap = readLightmap(node, where);
+        if (options_.loadIndirectUvs)
+          inst.indirectLightmap = readLightmap(node, where, "indirectLightmap");
         if (glm::determinant(world) < 0.0) ++mirrored;
         scene_.instances.push_back(std::move(inst));
         meshes.insert(node.mesh);

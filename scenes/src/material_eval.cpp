@@ -196,4 +196,45 @@ bool transmissive(const Scene& scene, int material, bool blend) {
   return std::any_of(texels.begin(), texels.end(), [](const glm::vec4& c) { return c.a < 1.0f; });
 }
 
+bool triangleTangents(const Scene& scene, uint32_t instance, uint32_t primitive, uint32_t triangle,
+                      glm::vec3 n, glm::vec3* t, glm::vec3* b) {
+  if (instance >= scene.instances.size()) return false;
+  const Instance& inst = scene.instances[instance];
+  const Mesh& mesh = scene.meshes[size_t(inst.mesh)];
+  if (primitive >= mesh.primitives.size()) return false;
+  const Primitive& prim = mesh.primitives[primitive];
+  const size_t i = 3 * size_t(triangle);
+  if (prim.uv0.size() != prim.positions.size() || i + 2 >= prim.indices.size()) return false;
+  const uint32_t k0 = prim.indices[i], k1 = prim.indices[i + 1], k2 = prim.indices[i + 2];
+  const glm::vec3 p0 = inst.toWorld(prim.positions[k0]);
+  const glm::vec3 e1 = inst.toWorld(prim.positions[k1]) - p0;
+  const glm::vec3 e2 = inst.toWorld(prim.positions[k2]) - p0;
+  const glm::vec2 d1 = prim.uv0[k1] - prim.uv0[k0], d2 = prim.uv0[k2] - prim.uv0[k0];
+  const float det = d1.x * d2.y - d2.x * d1.y;
+  if (!(std::abs(det) > 1e-12f)) return false;
+  const glm::vec3 dpdu = (e1 * d2.y - e2 * d1.y) / det;
+  const glm::vec3 dpdv = (e2 * d1.x - e1 * d2.x) / det;
+  glm::vec3 tangent = dpdu - n * glm::dot(n, dpdu);
+  const float length = glm::length(tangent);
+  if (!(length > 1e-12f)) return false;
+  tangent /= length;
+  const glm::vec3 up = glm::cross(n, tangent);
+  *t = tangent;
+  *b = glm::dot(up, -dpdv) >= 0.0f ? up : -up;
+  return true;
+}
+
+glm::vec3 normalMapped(const Scene& scene, int material, glm::vec2 uv0, glm::vec3 n, glm::vec3 t,
+                       glm::vec3 b) {
+  const Material& m = scene.material(material);
+  const TextureRef& ref = m.normalTexture;
+  if (!ref.valid() || size_t(ref.texture) >= scene.textures.size() ||
+      !scene.textures[size_t(ref.texture)].loaded())
+    return n;
+  const glm::vec3 c = 2.0f * textureRgb(scene, ref, uv0) - 1.0f;
+  const glm::vec3 mapped = c.x * m.normalScale * t + c.y * m.normalScale * b + c.z * n;
+  const float length = glm::length(mapped);
+  return length > 1e-6f ? mapped / length : n;
+}
+
 }  // namespace afterglow::scenes

@@ -86,6 +86,11 @@ TransportData makeTransport(const Shape& s, uint64_t seed = 1) {
     d.clusterMaterial.push_back(rng.below(uint32_t(d.materials.size())));
     d.clusterAlbedoTexture.push_back(glm::vec3(rng.unit(), rng.unit(), rng.unit()));
     d.clusterEmissionTexture.push_back(glm::vec3(rng.unit(), rng.unit(), rng.unit()));
+    d.clusterPosition.push_back(glm::vec3(rng.unit(), rng.unit(), rng.unit()) * 10.0f);
+  }
+  for (uint32_t p = 0; p < s.points; ++p) {
+    d.pointPosition.push_back(glm::vec3(rng.unit(), rng.unit(), rng.unit()) * 10.0f);
+    d.pointNormal.push_back(glm::normalize(glm::vec3(rng.unit(), rng.unit(), rng.unit()) + 0.1f));
   }
 
   for (uint32_t f = 0; f < s.farClusters; ++f) {
@@ -319,6 +324,9 @@ void expectEqual(const TransportData& a, const TransportData& b) {
   EXPECT_EQ(a.clusterMaterial, b.clusterMaterial);
   EXPECT_EQ(a.clusterAlbedoTexture, b.clusterAlbedoTexture);
   EXPECT_EQ(a.clusterEmissionTexture, b.clusterEmissionTexture);
+  EXPECT_EQ(a.clusterPosition, b.clusterPosition);
+  EXPECT_EQ(a.pointPosition, b.pointPosition);
+  EXPECT_EQ(a.pointNormal, b.pointNormal);
   EXPECT_EQ(a.links.rowStart, b.links.rowStart);
   EXPECT_EQ(a.links.targetBits, b.links.targetBits);
   EXPECT_EQ(a.links.link, b.links.link);
@@ -510,7 +518,7 @@ TEST(TransportFile, TransportDataHasNoFieldTheFileMisses) {
   // The sizes with libstdc++ on 64-bit when this file format was written. A failure means a
   // field was added: serialise it (transport_file.cpp) and compare it in expectEqual() above.
 #if defined(__GLIBCXX__) && UINTPTR_MAX == 0xffffffffffffffffull
-  EXPECT_EQ(sizeof(TransportData), 1248u);
+  EXPECT_EQ(sizeof(TransportData), 1320u);
   EXPECT_EQ(sizeof(ReflectionTransport), 80u);
   EXPECT_EQ(sizeof(ReflectionProbeCapture), 152u);
   EXPECT_EQ(sizeof(AtlasLayout), 128u);
@@ -823,7 +831,7 @@ TEST(TransportFile, SectionTableRules) {
   const TransportData data = makeTransport(Shape());
   const std::vector<uint8_t> bytes = serializeTransport(data);
   const std::vector<Section> sections = split(bytes);
-  ASSERT_EQ(sections.size(), 15u);
+  ASSERT_EQ(sections.size(), 16u);
   // join() rebuilds the writer's layout exactly.
   EXPECT_EQ(join(sections), bytes);
 

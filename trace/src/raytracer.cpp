@@ -805,6 +805,7 @@ glm::vec2 RayTracer::uv(const Hit& hit, int set) const {
     return mixCorners(&g.lightmapUv[3 * size_t(hit.triangle)], hit);
   const std::vector<glm::vec2>* uvs = set == 0   ? &g.source->uv0
                                       : set == 1 ? &g.source->uv1
+                                      : set == 2 ? &g.source->indirectUv
                                                  : nullptr;
   if (!uvs || uvs->size() != g.source->positions.size()) return glm::vec2(0.0f);
   const uint32_t* t = g.indices + 3 * size_t(hit.triangle);

@@ -792,6 +792,30 @@ void storeTexelSky(const TexelSet& texels, const TexelGather& gather,
   }, 4096);
 }
 
+// Where the clusters and gather points lie (TransportData::clusterPosition, ...): a point at
+// its texels' area-weighted centre, facing their mean normal.
+void storeDirections(const TexelSet& texels, const TexelGather& gather, const Clusters& clusters,
+                     runtime::TransportData& transport) {
+  transport.clusterPosition = clusters.position;
+  const uint32_t points = gather.points();
+  transport.pointPosition.assign(points, glm::vec3(0.0f));
+  transport.pointNormal.assign(points, glm::vec3(0.0f, 0.0f, 1.0f));
+  parallelFor(points, [&](size_t p) {
+    glm::dvec3 position(0.0), normal(0.0);
+    double area = 0.0;
+    for (uint32_t k = gather.pointStart[p]; k < gather.pointStart[p + 1]; ++k) {
+      const uint32_t t = gather.pointTexels[k];
+      const double a = std::max(double(texels.area[t]), 1e-12);
+      position += a * glm::dvec3(texels.position[t]);
+      normal += a * glm::dvec3(texels.normal[t]);
+      area += a;
+    }
+    if (area <= 0.0) return;
+    transport.pointPosition[p] = glm::vec3(position / area);
+    if (glm::length(normal) > 0.0) transport.pointNormal[p] = glm::vec3(glm::normalize(normal));
+  }, 4096);
+}
+
 // What each cluster gathers: its texels' gather points, area-weighted (a back cluster: its own
 // row, after the points').
 runtime::SparseMatrix clusterGather(const TexelSet& texels, const TexelGather& gather,
@@ -941,6 +965,7 @@ Status computeLinks(const scenes::Scene& scene, const trace::RayTracer& tracer, 
   if (progress.cancelled()) return Status::error("cancelled");
 
   storeTexelSky(texels, gather, transport);
+  storeDirections(texels, gather, clusters, transport);
   transport.clusterGather = clusterGather(texels, gather, clusters, back);
   // How texels read the gather points and how the points smooth each other, built by the
   // runtime from what the transport file stores (so a loaded file has the very same maps).

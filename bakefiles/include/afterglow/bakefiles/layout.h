@@ -6,6 +6,8 @@
 //   transport.agt                   the transport, for the runtime and `afterglow relight`
 //   lightmaps/lightmap<i>.exr       linear half-float E/π per atlas
 //   lightmaps/lightmap<i>.png       its tone-mapped preview
+//   lightmaps/lightmap<i>_d{x,y,z}.exr  directional: the bounced light's gradient per axis
+//                                   (indirect<i>_d*.exr with two resolutions)
 //   probes/light_probes.json        light probes: positions, kinds, tetrahedra, settings
 //   probes/light_probes_sh.bin      their radiance SH L2
 //   probes/reflection_probes.json   reflection probes: boxes, files, mips
@@ -39,6 +41,10 @@ std::string lightmapPng(size_t atlas);
 // reads at TEXCOORD_2 and composes with the direct light.
 std::string indirectExr(size_t atlas);
 std::string indirectPng(size_t atlas);
+// Directional lightmaps: the bounced light's gradient along world axis `axis` (0 x, 1 y, 2 z)
+// for the transport's atlas `atlas`: "lightmaps/lightmap<atlas>_dx.exr" (..._dy, _dz), or with
+// two resolutions (`grid`) "lightmaps/indirect<atlas>_dx.exr", read at the grid's TEXCOORD_2.
+std::string directionalExr(size_t atlas, int axis, bool grid);
 // Mixed lights' shadowmask for lightmap atlas `atlas`: RGBA, linear 8-bit visible fractions.
 std::string shadowmaskPng(size_t atlas);
 // A reflection chain's cube map within kProbesDir: "reflection_sky.exr" for chain 0 (the sky),

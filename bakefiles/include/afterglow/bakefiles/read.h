@@ -3,6 +3,7 @@
 // the transport solved as the bake solved it. Errors name the file at fault.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -26,6 +27,17 @@ namespace afterglow::bakefiles {
 // document's extras.afterglow.lightmaps (falling back to every MOZ_lightmap extension's
 // extras.afterglow.exr), indexed by atlas.
 Result<std::vector<LightmapImage>> loadBakedLightmaps(const std::string& gltfPath);
+
+// The directional lightmaps a bake attached (its glTF's extras.afterglow.directional,
+// runtime/directional.h): per atlas the bounced light's gradient along world x, y and z, read
+// at TEXCOORD_1 (texCoord 1) or an indirect grid's TEXCOORD_2 (texCoord 2). Empty for a bake
+// without.
+struct BakedDirectional {
+  int texCoord = 1;
+  std::vector<std::array<LightmapImage, 3>> atlases;
+  bool empty() const { return atlases.empty(); }
+};
+Result<BakedDirectional> loadBakedDirectional(const std::string& gltfPath);
 
 // The reflection probes a bake wrote beside its glTF (probes/reflection_probes.json, the cube
 // EXRs and dfg.exr it names), read back as an engine would: probe 0 the sky. Empty (no file)

@@ -4,6 +4,7 @@
 // so a failed or interrupted bake leaves nothing behind.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,15 @@ Result<nlohmann::json> writeLightmaps(const std::vector<runtime::AtlasLayout>& l
                                       const std::string& outDir, AtomicOutput& out,
                                       std::vector<std::string>& written,
                                       AtlasKind kind = AtlasKind::Lightmap);
+
+// Directional lightmaps (runtime/directional.h): per atlas of the transport (`layouts`), its
+// three gradient images as OUT/lightmaps/lightmap<i>_dx.exr, _dy, _dz (indirect<i>_d*.exr on an
+// indirect grid, `grid`), linear half float, appending the paths to `written`. Returns the
+// glTF's and report.json's "directional": the files, their UV set and how to decode them.
+Result<nlohmann::json> writeDirectionalLightmaps(
+    const std::vector<runtime::AtlasLayout>& layouts,
+    const std::vector<std::array<std::vector<glm::vec3>, 3>>& images, bool grid,
+    const std::string& outDir, AtomicOutput& out, std::vector<std::string>& written);
 
 // The light probes a bake used, and how they came about (placed or read from a file).
 struct ProbeSet {

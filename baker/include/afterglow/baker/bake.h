@@ -4,6 +4,7 @@
 // included.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -46,6 +47,11 @@ struct BakeResult {
   // Two resolutions: per indirect atlas, the grid's sky and bounced light (E/π, dilated), what
   // an engine composing the lightmap itself reads at the indirect UVs; else empty.
   std::vector<std::vector<glm::vec3>> indirectLightmaps;
+  // Directional lightmaps (BakeOptions::directional, runtime/directional.h): per atlas of the
+  // transport's texels (the grid's with two resolutions, else the lightmap's), the bounced
+  // light's gradient ∂(E/π)/∂n along world x, y and z, width*height each, filled and dilated as
+  // that atlas's light; empty without.
+  std::vector<std::array<std::vector<glm::vec3>, 3>> directionalLightmaps;
   // Mixed lights' shadowmask (shadowmask.h): per lightmap atlas, width*height RGBA visible
   // fractions, filled and dilated like the lightmaps; empty when no light is mixed. Per scene
   // light, its channel (-1: none).

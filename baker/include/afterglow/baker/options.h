@@ -114,6 +114,8 @@ struct BakeOptions {
   glm::vec3 skyColor{0.0f};          // constant sky radiance, linear RGB
   std::string skyImage;              // equirect HDR image (overrides skyColor when set)
   int dilation = 2;                  // texels each chart is dilated into its padding
+  bool directional = true;           // directional lightmaps: the bounced light's gradient
+                                     //   atlases (runtime/directional.h)
   runtime::ProbeTetrahedra probes;   // light probes to bake (probes::tetrahedralize); none: empty
   ProbeOptions probeOptions;
   ReflectionOptions reflections;     // the scene's reflection probes' capture

@@ -7,7 +7,9 @@
 // prefiltered, the DFG table), so metal and gloss show. Glass (alphaMode BLEND,
 // KHR_materials_transmission) is blended as an engine blends it: (1 − open) of the glass as
 // shaded over open × tint of what lies behind it (scenes::transmission). The output is linear
-// HDR; tone mapping happens on write.
+// HDR; tone mapping happens on write. With directional lightmaps (bakefiles::BakedDirectional,
+// read at TEXCOORD_1), a material's normal texture tilts the normal the bounced light is read
+// at (runtime::shadeDirectional), as an engine shading with them does.
 // `afterglow render --reference` path-traces the same view instead (baker::renderReference),
 // shaded the same way but with the lightmap replaced by a path-traced E/π at each first hit.
 #pragma once
@@ -43,7 +45,8 @@ Result<std::vector<glm::vec3>> renderBaked(const scenes::Scene& scene,
                                            const RenderOptions& options = {},
                                            Progress& progress = nullProgress(),
                                            const std::vector<ProbeSphere>& spheres = {},
-                                           const bakefiles::BakedReflections* reflections = nullptr);
+                                           const bakefiles::BakedReflections* reflections = nullptr,
+                                           const bakefiles::BakedDirectional* directional = nullptr);
 
 // Writes a tone-mapped sRGB PNG atomically. exposureStops NaN = automatic (the 99th percentile
 // maps to 0.8 after the tone curve); otherwise the image is scaled by 2^exposureStops.

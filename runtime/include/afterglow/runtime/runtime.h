@@ -44,6 +44,7 @@
 
 #include <glm/glm.hpp>
 
+#include "afterglow/runtime/directional.h"
 #include "afterglow/runtime/probe_lights.h"
 #include "afterglow/runtime/probe_sh.h"
 #include "afterglow/runtime/probe_tetrahedra.h"
@@ -93,6 +94,10 @@ struct UpdateOptions {
   // (data().lightmap) and the light colours; readAtlas and readTexels keep their last values,
   // and so do the reflection probes' views of the lightmap. No effect with one resolution.
   bool composeLightmap = true;
+  // Directional lightmaps (directional.h): refresh the bounced light's gradient atlases
+  // (readDirectionalAtlas) from the new solution. The first such update works out the links'
+  // directions once (memory: 12 bytes a link). No effect on a transport without directions.
+  bool directional = false;
 };
 
 struct UpdateStats {
@@ -205,6 +210,13 @@ class Runtime {
   int indirectAtlasWidth(int atlas) const;
   int indirectAtlasHeight(int atlas) const;
   bool readIndirectAtlas(int atlas, std::vector<glm::vec3>& image) const;
+  // Directional lightmaps (directional.h, UpdateOptions::directional): per atlas of the
+  // transport's own texels (the indirect grid's with two resolutions, read at TEXCOORD_2; else
+  // the lightmap's), the gradient ∂(E/π)/∂n of its bounced light along world axis `axis` (0 x,
+  // 1 y, 2 z), resolved as its light is. Black until a directional update; none without
+  // directions in the transport.
+  int directionalAtlasCount() const;
+  bool readDirectionalAtlas(int atlas, int axis, std::vector<glm::vec3>& image) const;
   // Per texel (direct + indirect), texelCount() values.
   int texelCount() const;
   void readTexels(glm::vec3* texels) const;
@@ -330,6 +342,15 @@ class Runtime {
   // alone, UpdateOptions::composeLightmap).
   int gridFront_ = 0;
   std::vector<std::vector<glm::vec3>> gridImages_[2];
+  // Directional lightmaps: made at the first directional update; per transport texel and axis
+  // the gradient, and the atlases ([atlas * 3 + axis]), flipped on their own.
+  ParallelFor parallelFor_;  // the solver's, for the directional light's passes
+  std::unique_ptr<DirectionalLight> directional_;
+  std::vector<LightGradient> gradient_;
+  std::vector<glm::vec3> gradientAxis_[3];
+  int directionalFront_ = 0;
+  std::vector<std::vector<glm::vec3>> directionalImages_[2];
+  void refreshDirectional();
   // Light probes: refreshed in probeWork_ (by range, under updateMutex_), published by copying
   // it into the back buffer and flipping probeFront_ under outputMutex_.
   std::vector<ShL2> probeWork_;

@@ -102,6 +102,9 @@ class Solver {
   const std::vector<glm::vec3>& clusterAlbedo() const { return albedo_; }
   // Per row of the links, what it gathered in the last pass (V).
   const std::vector<glm::vec4>& rowGathered() const { return gathered_; }
+  // What the links read, per target (linkTargetCount): R of the clusters, the far clusters and
+  // the shared far fields, as the last pass's rows read them.
+  const std::vector<glm::vec4>& linkTargetRadiance() const { return reflected4_; }
 
  private:
   // body(first, last) over fixed blocks of `items` items, through parallelFor_ when set. A

@@ -301,6 +301,15 @@ struct TransportData {
   // each source's direct light; the sources' texelTransfer is then empty.
   LightmapLayers lightmap;
 
+  // Where the clusters and gather points lie, for directional lightmaps (directional.h): a
+  // link's direction is its target's position seen from its gather point (a far cluster's:
+  // the mix of its clusters', a shared far field's: from the mean of its points). All three
+  // empty: the transport gives no directional lightmaps.
+  std::vector<glm::vec3> clusterPosition;  // per cluster, world, its texels' area-weighted centre
+  std::vector<glm::vec3> pointPosition;    // per gather point, world, its texels' centre
+  std::vector<glm::vec3> pointNormal;      // per gather point, unit
+  bool hasDirections() const { return !pointPosition.empty(); }
+
   // Bake-level settings (Unity semantics; 1 is physically correct).
   float indirectIntensity = 1.0f;  // scales all bounced light reaching texels
   float albedoBoost = 1.0f;        // >= 1, pushes albedo toward white for bounces

@@ -94,8 +94,9 @@
 namespace afterglow::runtime {
 
 // 2: 4-byte links, far clusters, gather map source; 3: shared far fields; 4: link rows padded
-// to fours; 6: reflection probes; 7: the light probes' depth maps; 8: lightmap layers (LAYR)
-constexpr uint32_t kTransportVersion = 8;
+// to fours; 6: reflection probes; 7: the light probes' depth maps; 8: lightmap layers (LAYR);
+// 9: cluster and gather point positions for directional lightmaps (GEOM)
+constexpr uint32_t kTransportVersion = 9;
 constexpr char kTransportMagic[8] = {'A', 'G', 'L', 'O', 'W', 'T', 'R', '\0'};
 constexpr uint32_t kTransportHeaderSize = 40;
 

@@ -10,6 +10,14 @@ namespace afterglow::scenes {
 
 struct LoadOptions {
   bool loadTextures = true;  // false skips image decoding (faster `info`, UV-only work)
+  // Decodes normal textures too (`afterglow render` with directional lightmaps); the bake
+  // reads none of them, and decoding them would double its load time.
+  bool loadNormalTextures = false;
+  // Reads a baked level's indirect grid (TEXCOORD_2 and each node's
+  // extras.afterglow.indirectLightmap, uv/indirect.h) into Primitive::indirectUv and
+  // Instance::indirectLightmap, for `render` reading the grid's directional lightmaps. Off, a
+  // level baked again gets a grid of the new bake's own.
+  bool loadIndirectUvs = false;
 };
 
 // Loads a glTF. Errors name the file and the mesh/primitive/material at fault; recoverable

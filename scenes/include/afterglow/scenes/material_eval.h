@@ -62,6 +62,18 @@ struct SurfaceBrdf {
 SurfaceBrdf surfaceBrdf(const Scene& scene, int material, glm::vec2 uv0);
 // Emitted radiance of a material at a UV, linear RGB.
 glm::vec3 emittedRadiance(const Scene& scene, int material, glm::vec2 uv0);
+// A triangle's tangent space in world space where its TEXCOORD_0 has none given (glTF: a
+// client computes one; per triangle, as MikkTSpace starts before it smooths): the tangent along
+// increasing u made orthogonal to the normal n, the bitangent up the image (against v, glTF's
+// +Y of a normal texture). False where the UVs are degenerate.
+bool triangleTangents(const Scene& scene, uint32_t instance, uint32_t primitive, uint32_t triangle,
+                      glm::vec3 n, glm::vec3* t, glm::vec3* b);
+// The shading normal the material's normal texture gives at a surface point whose normal is n
+// and whose tangent space (glTF: +X along the texture's u, +Y up the image, i.e. against v) is
+// t and b: normalize(x·s·t + y·s·b + z·n) with (x, y, z) = 2 × rgb − 1 and s the texture's
+// scale. n itself without a normal texture (or one that is not loaded).
+glm::vec3 normalMapped(const Scene& scene, int material, glm::vec2 uv0, glm::vec3 n, glm::vec3 t,
+                       glm::vec3 b);
 
 // What a surface lets through at a point, glass: alphaMode BLEND lets 1 − alpha through (alpha =
 // baseColorFactor.a × baseColorTexture.a), KHR_materials_transmission its transmission

@@ -71,7 +71,9 @@ struct Material {
   // × transmissionTexture.r (linear), tinted by the base colour (material_eval.h, transmission).
   float transmissionFactor = 0.0f;
   TextureRef transmissionTexture;
-  TextureRef normalTexture;             // kept for export; not used for lighting
+  TextureRef normalTexture;             // the bake ignores it; `render` tilts the directional
+                                        //   lightmaps' normals by it
+  float normalScale = 1.0f;             // normalTexture.scale: the map's x and y are scaled by it
   TextureRef occlusionTexture;          // kept for export; not used for lighting
   glm::vec3 emissiveFactor{0.0f};       // linear RGB
   float emissiveStrength = 1.0f;        // KHR_materials_emissive_strength

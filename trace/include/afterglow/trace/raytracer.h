@@ -182,7 +182,8 @@ class RayTracer {
   // Interpolated vertex normal in world space, unit, on the front side (not flipped toward the
   // ray); the geometric normal when the primitive has no usable normals.
   glm::vec3 shadingNormal(const Hit& hit) const;
-  // Interpolated UV of set 0 (TEXCOORD_0) or 1 (TEXCOORD_1); (0, 0) when the set is absent.
+  // Interpolated UV of set 0 (TEXCOORD_0), 1 (TEXCOORD_1) or 2 (the indirect grid's,
+  // Primitive::indirectUv); (0, 0) when the set is absent.
   glm::vec2 uv(const Hit& hit, int set) const;
   // The hit triangle's lightmap UVs (RayTracerOptions::lightmapUvSet) at its three corners, next
   // to each other (one cache line to prefetch), or nullptr without that set; mixCorners()
