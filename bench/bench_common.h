@@ -48,6 +48,7 @@ int benchViews(int argc, char** argv);
 int benchProbes(int argc, char** argv);
 int benchReflection(int argc, char** argv);
 int benchGlass(int argc, char** argv);
+int benchNoise(int argc, char** argv);
 // bench_reflection_probes.cpp: capture, runtime update and transport share of a bake.
 int reflectionBakeFigures(const std::string& path, float texelsPerUnit, int threads, int repeat,
                           int probeCount, int resolution);

@@ -9,6 +9,7 @@
 //   afterglow_bench reflection [SCENE] [--texels-per-unit 4] [--threads 2] [--probes 4]
 //       [--resolution 128] [--repeat 10] [--sampled] [--prefilter-only]
 //   afterglow_bench glass [SCENE] [--sky R,G,B] [--spp N] [--stride N] [--opaque-glass] ...
+//   afterglow_bench noise [SCENE] [--instance NAME] [--texels-per-unit N] ...
 #include <cstdio>
 #include <cstring>
 
@@ -25,8 +26,9 @@ int main(int argc, char** argv) {
   if (std::strcmp(command, "probes") == 0) return benchProbes(argc, argv);
   if (std::strcmp(command, "reflection") == 0) return benchReflection(argc, argv);
   if (std::strcmp(command, "glass") == 0) return benchGlass(argc, argv);
+  if (std::strcmp(command, "noise") == 0) return benchNoise(argc, argv);
   std::fprintf(stderr,
-               "usage: afterglow_bench uv|bake|runtime|accuracy|views|probes|reflection|glass "
+               "usage: afterglow_bench uv|bake|runtime|accuracy|views|probes|reflection|glass|noise "
                "[options]\n"
                "  uv        lightmap UVs of Sponza: utilisation, stretch, time (issue 2)\n"
                "  bake      bake time, accuracy, ray throughput, memory (issue 3)\n"
@@ -35,7 +37,7 @@ int main(int argc, char** argv) {
                "  views     two linear pictures of one view (afterglow, Cycles) per material\n"
                "  probes    light probes: placement, precompute share, refresh time, bytes (issue 14)\n"
                "  reflection  reflection probes: prefilter, capture, runtime update, transport share (issue 15)\n"
-               "  glass     the gas station's shop, lit by the sky through its windows (issue 28)"
-               "\n");
+               "  glass     the gas station's shop, lit by the sky through its windows (issue 28)\n"
+               "  noise     patch-scale noise of one instance's bounced light (issue 29)\n");
   return 2;
 }
