@@ -133,17 +133,20 @@ void DirectionalLight::forRange(size_t items, const Body& body) const {
 }
 
 DirectionalLight::DirectionalLight(const TransportData& data) : data_(data) {
-  const uint32_t points = data.gatherPointCount, clusters = data.clusterCount;
+  // Without directions (an invalid use) every gradient stays 0 rather than reading past them.
+  const uint32_t points = data.hasDirections() ? data.gatherPointCount : 0;
+  const uint32_t clusters = data.clusterCount;
   const uint32_t sharedBase = data.sharedFarBase();
   // Where every link target lies: clusters, then far clusters (their clusters' mix).
   std::vector<glm::vec3> target(sharedBase, glm::vec3(0.0f));
   for (uint32_t c = 0; c < clusters && c < data.clusterPosition.size(); ++c)
     target[c] = data.clusterPosition[c];
+  const bool positions = data.clusterPosition.size() == clusters;
   const SparseMatrix& far = data.farClusters;
   for (size_t f = 0; f < far.rows(); ++f) {
     glm::vec3 sum(0.0f);
     float weight = 0.0f;
-    for (uint32_t k = far.rowStart[f]; k < far.rowStart[f + 1]; ++k) {
+    for (uint32_t k = far.rowStart[f]; k < far.rowStart[f + 1] && positions; ++k) {
       sum += far.weight[k] * data.clusterPosition[far.column[k]];
       weight += far.weight[k];
     }
@@ -189,8 +192,12 @@ DirectionalLight::DirectionalLight(const TransportData& data) : data_(data) {
           linkFactor(from, normal, target[shared.link[k] & sharedMask], shared.weightAt(g, k));
   }
   shared_.resize(groups * 3);
-  points_.resize(size_t(points) * 3);
-  filtered_.resize(size_t(points) * 3);
+  points_.resize(size_t(data.gatherPointCount) * 3);
+  filtered_.resize(size_t(data.gatherPointCount) * 3);
+  pointShared_.resize(data.gatherPointCount, kNoTexel);
+  pointSharedWeight_.resize(data.gatherPointCount, 0.0f);
+  linkFactor_.resize(data.gatherPointCount > 0 ? data.links.rowStart[data.gatherPointCount] : 0,
+                     glm::vec3(0.0f));
 }
 
 void DirectionalLight::texels(const Solver& solver, LightGradient* out) const {

@@ -1,7 +1,5 @@
 #include "afterglow/runtime/runtime.h"
 
-#include "afterglow/runtime/directional.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
