@@ -154,6 +154,11 @@ int benchAccuracy(int argc, char** argv) {
     if (seconds < bakeSeconds) bakeSeconds = seconds, baked = std::move(again);
   }
   const baker::BakeResult& b = baked.value();
+  // (Before the reference, which takes a while.)
+  if (breakdownRays > 0 && b.transport.lightmap.active())
+    return fail("accuracy: --breakdown classes the lightmap's texels by their clusters and gather "
+                "points, which an indirect grid does not have (the grid's texels do): give "
+                "--indirect-texels-per-unit equal to --texels-per-unit for one resolution");
   std::printf("scene        %s\n", scenePath.c_str());
   size_t valid = 0;
   for (uint8_t v : b.texels.valid) valid += v;
