@@ -25,6 +25,25 @@ namespace afterglow::bench {
 
 namespace {
 
+// One axis of a separable Gaussian blur (`rows`: along rows, else along columns), out to
+// the kernel's reach, zero outside the image.
+std::vector<double> blurAxis(const std::vector<double>& values, int width, int height,
+                             const std::vector<double>& kernel, bool rows) {
+  const int radius = int(kernel.size() / 2);
+  std::vector<double> out(values.size(), 0.0);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      double sum = 0.0;
+      for (int i = -radius; i <= radius; ++i) {
+        const int xx = rows ? x + i : x, yy = rows ? y : y + i;
+        if (xx >= 0 && xx < width && yy >= 0 && yy < height)
+          sum += kernel[size_t(i + radius)] * values[size_t(yy * width + xx)];
+      }
+      out[size_t(y * width + x)] = sum;
+    }
+  return out;
+}
+
 // Separable Gaussian blur of `values` (width × height, one float a pixel) with σ in pixels,
 // out to 3σ, zero outside the image.
 std::vector<double> gaussian(const std::vector<double>& values, int width, int height,
@@ -33,26 +52,7 @@ std::vector<double> gaussian(const std::vector<double>& values, int width, int h
   std::vector<double> kernel(size_t(2 * radius + 1));
   for (int i = -radius; i <= radius; ++i)
     kernel[size_t(i + radius)] = std::exp(-0.5 * double(i * i) / (sigma * sigma));
-  std::vector<double> rows(values.size(), 0.0), out(values.size(), 0.0);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      double sum = 0.0;
-      for (int i = -radius; i <= radius; ++i) {
-        const int xx = x + i;
-        if (xx >= 0 && xx < width) sum += kernel[size_t(i + radius)] * values[size_t(y * width + xx)];
-      }
-      rows[size_t(y * width + x)] = sum;
-    }
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      double sum = 0.0;
-      for (int i = -radius; i <= radius; ++i) {
-        const int yy = y + i;
-        if (yy >= 0 && yy < height) sum += kernel[size_t(i + radius)] * rows[size_t(yy * width + x)];
-      }
-      out[size_t(y * width + x)] = sum;
-    }
-  return out;
+  return blurAxis(blurAxis(values, width, height, kernel, true), width, height, kernel, false);
 }
 
 }  // namespace
